@@ -1,0 +1,129 @@
+"""Flexspline geometry: the five design dimensions of the seed paper plus the fixed ones.
+
+All lengths in metres. Fields may be floats or equal-length numpy arrays (a batch of
+geometries for a Sobol study); every check is vectorised and names the first
+offending sample.
+
+Layout along the cup axis, from the bottom (hub) to the open end::
+
+    hub | diaphragm (t_d) | end radius R_k | cylinder (h_c) | lead radius R_v |
+        undercut (wall h_pz - h_p, width w_u) | toothed rim (h_pz, face width b)
+
+The bore radius ``R_i`` is set by the wave generator and does not change with the
+wall thicknesses; the tooth root sits at ``R_i + h_pz`` and the pitch circle one
+dedendum (taken as one module) further out.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields, replace
+
+import numpy as np
+
+from hdsim.errors import InputError
+
+
+def _dim(doc: str, unit: str = "m", symbol: str = "", design: bool = False):
+    return field(metadata={"doc": doc, "unit": unit, "symbol": symbol, "design": design})
+
+
+@dataclass(frozen=True)
+class FlexsplineGeometry:
+    """Dimensions of a cup-type flexspline [m, Pa]."""
+
+    h_pz: float = _dim("thickness under the teeth (rim wall)", symbol="h_pz", design=True)
+    h_c: float = _dim("wall thickness of the cylindrical part", symbol="h_c", design=True)
+    R_v: float = _dim("lead radius of the gearing (cylinder-to-rim transition)", symbol="R_v", design=True)
+    R_k: float = _dim("end radius of the cylinder (diaphragm-to-cylinder fillet)", symbol="R_k", design=True)
+    h_p: float = _dim("depth of the undercut below the tooth root", symbol="h_p", design=True)
+    R_i: float = _dim("bore radius, set by the wave generator")
+    face_width: float = _dim("face width of the toothed rim b")
+    cup_length: float = _dim("cup length from diaphragm mid-plane to the open end L")
+    undercut_width: float = _dim("axial width of the undercut groove w_u")
+    t_d: float = _dim("diaphragm thickness")
+    r_hub: float = _dim("outer radius of the rigid hub (inner edge of the diaphragm)")
+    module: float = _dim("gear module m")
+    teeth: float = _dim("flexspline tooth count z_fs", unit="-")
+    E: float = _dim("Young's modulus", unit="Pa")
+    nu: float = _dim("Poisson's ratio", unit="-")
+
+    def __post_init__(self):
+        validate_geometry(self)
+
+    # Derived radii and lengths: computed, never stored, so a replace() cannot leave
+    # them stale.
+    @property
+    def G(self):
+        """Shear modulus [Pa]."""
+        return self.E / (2.0 * (1.0 + self.nu))
+
+    @property
+    def R_c(self):
+        """Mean radius of the cylinder wall [m]."""
+        return self.R_i + 0.5 * self.h_c
+
+    @property
+    def R_rim(self):
+        """Mean radius of the toothed rim wall [m]."""
+        return self.R_i + 0.5 * self.h_pz
+
+    @property
+    def pitch_radius(self):
+        """Pitch radius, one dedendum (= module) beyond the tooth root [m]."""
+        return self.R_i + self.h_pz + self.module
+
+    @property
+    def cylinder_length(self):
+        """Length of the plain cylinder between the two fillets [m]."""
+        return self.cup_length - self.R_k - self.R_v - self.undercut_width - self.face_width
+
+    def replace(self, **changes) -> "FlexsplineGeometry":
+        return replace(self, **changes)
+
+    @classmethod
+    def design_names(cls) -> tuple[str, ...]:
+        return tuple(f.name for f in fields(cls) if f.metadata["design"])
+
+    def as_dict(self) -> dict:
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+
+def _first_bad(condition) -> int | None:
+    bad = np.atleast_1d(np.asarray(condition))
+    if not bad.any():
+        return None
+    return int(np.flatnonzero(bad)[0])
+
+
+def _fail(message: str, index: int | None, batched: bool) -> None:
+    where = f" (sample {index})" if batched else ""
+    raise InputError(f"flexspline geometry{where}: {message}")
+
+
+def validate_geometry(g: FlexsplineGeometry) -> None:
+    """Refuse shapes that cannot be built or that break the thin-shell closed forms."""
+    values = {f.name: np.asarray(getattr(g, f.name), dtype=float) for f in fields(g)}
+    batched = any(v.ndim > 0 for v in values.values())
+    for name, v in values.items():
+        i = _first_bad(~np.isfinite(v) | (v <= 0.0))
+        if i is not None:
+            _fail(f"{name} must be a positive finite number, got {np.atleast_1d(v)[i]:g}", i, batched)
+    fmt = lambda x, i: f"{np.atleast_1d(x)[i] * 1e3:.4g} mm"  # noqa: E731
+    checks = [
+        (g.h_p >= g.h_pz, lambda i: f"undercut depth h_p = {fmt(g.h_p, i)} must be less than the "
+                                    f"thickness under the teeth h_pz = {fmt(g.h_pz, i)}"),
+        (g.nu >= 0.5, lambda i: "Poisson's ratio must be below 0.5"),
+        (np.maximum(g.h_pz, g.h_c) > 0.1 * g.R_i,
+         lambda i: f"walls thicker than 10 % of the bore radius ({fmt(0.1 * g.R_i, i)}) break the "
+                   "thin-shell assumption"),
+        (g.R_k >= g.R_c - g.r_hub,
+         lambda i: f"end radius R_k = {fmt(g.R_k, i)} does not fit between hub and cylinder "
+                   f"({fmt(g.R_c - g.r_hub, i)} available)"),
+        (g.cylinder_length <= 0.0,
+         lambda i: f"R_k + R_v + undercut + face width exceed the cup length {fmt(g.cup_length, i)}: "
+                   f"no cylinder left (R_v = {fmt(g.R_v, i)}, R_k = {fmt(g.R_k, i)})"),
+    ]
+    for condition, message in checks:
+        i = _first_bad(condition)
+        if i is not None:
+            _fail(message(i), i, batched)

@@ -1,0 +1,126 @@
+"""Test metrics: pure functions over the time series of a locked-WG torque cycle.
+
+Conventions (see docs/physics.md, "Test definitions"):
+
+- **Lost motion, full span** (catalog, seed paper): twist at the last +A turning
+  point minus twist at the last −A turning point, each reached while loading
+  towards it; A = 4 % T_N.
+- **Lost motion, centre line** (Spinea's convention): span of the mid-line of the
+  ±T_N loop between ±A, with the loop's odd symmetry: ``2 (mid(0) − mid(−A))``.
+- **Hysteresis loss**: twist difference between the two zero-torque crossings of a
+  ±T_N loop (B and B′, HD LLC catalog p. 49).
+- **K1, K2, K3**: three-segment law (knots at the unit's T1, T2) fitted with a free
+  offset to the loading branch from zero torque to −T_N after the reversal at +T_N,
+  mirrored; samples below T1/2 are left out: the backlash step and the micro-slip
+  sit there, and they are what lost motion and hysteresis loss measure. **Torsion at rated** is the fitted law's twist at T_N.
+
+Every function takes arrays with a leading batch axis ``(M, nt)`` and returns ``(M,)``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hdsim.physics.stiffness import fit_three_segment, three_segment_twist
+from hdsim.units import rad_to_arcmin
+
+
+def _segments(levels):
+    return list(zip(levels[:-1], levels[1:]))
+
+
+def _segment_slice(index, n):
+    return slice(index * n, (index + 1) * n + 1)
+
+
+def _last_segment(levels, start, end):
+    """Index of the last ramp from level ``start`` to ``end`` (or None)."""
+    found = [i for i, (a, b) in enumerate(_segments(levels)) if np.isclose(a, start) and np.isclose(b, end)]
+    return found[-1] if found else None
+
+
+def _interp_rows(x_rows, y_rows, x0):
+    """Per row, y at x = x0 by linear interpolation (x monotonic along a ramp)."""
+    out = np.empty(x_rows.shape[0])
+    for m, (x, y) in enumerate(zip(x_rows, y_rows)):
+        order = np.argsort(x)
+        out[m] = np.interp(x0, x[order], y[order], left=np.nan, right=np.nan)
+    return out
+
+
+def lost_motion_full_span(twist, levels, n):
+    """θ(+A) − θ(−A) at the last turning points of a cycle [rad]."""
+    amplitude = np.max(levels)
+    plus = [k for k, level in enumerate(levels) if np.isclose(level, amplitude)]
+    minus = [k for k, level in enumerate(levels) if np.isclose(level, -amplitude)]
+    return twist[:, plus[-1] * n] - twist[:, minus[-1] * n]
+
+
+def _branches(torque, twist, levels, n):
+    """(descending ramp +A→−A, following ascending ramp from −A) as (torque, twist) pairs."""
+    amplitude = np.max(levels)
+    down = _last_segment(levels, amplitude, -amplitude)
+    if down is None or down + 1 >= len(levels) - 1:
+        raise ValueError("the cycle needs a ramp +A → −A followed by a rising ramp")
+    up = down + 1
+    sd, su = _segment_slice(down, n), _segment_slice(up, n)
+    return (torque[:, sd], twist[:, sd]), (torque[:, su], twist[:, su])
+
+
+def hysteresis_loss(torque, twist, levels, n):
+    """Twist difference at zero torque between unloading from +A and from −A [rad]."""
+    (td, pd), (tu, pu) = _branches(torque, twist, levels, n)
+    return _interp_rows(td, pd, 0.0) - _interp_rows(tu, pu, 0.0)
+
+
+def lost_motion_centre_line(torque, twist, levels, n, level_torque):
+    """Span of the loop mid-line between ±``level_torque`` [rad] (odd symmetry assumed)."""
+    (td, pd), (tu, pu) = _branches(torque, twist, levels, n)
+    level_torque = np.broadcast_to(level_torque, (torque.shape[0],))
+    mid0 = 0.5 * (_interp_rows(td, pd, 0.0) + _interp_rows(tu, pu, 0.0))
+    mid_minus = np.array([0.5 * (_interp_rows(td[m:m + 1], pd[m:m + 1], -L)[0]
+                                 + _interp_rows(tu[m:m + 1], pu[m:m + 1], -L)[0])
+                          for m, L in enumerate(level_torque)])
+    return 2.0 * (mid0 - mid_minus)
+
+
+def stiffness_fit(torque, twist, levels, n, T1, T2, rated_torque):
+    """(K1, K2, K3 [N·m/rad], torsion at T_N [rad]) from the loading branch to −A."""
+    (td, pd), _ = _branches(torque, twist, levels, n)
+    M = torque.shape[0]
+    T1, T2, TN = (np.broadcast_to(v, (M,)) for v in (T1, T2, rated_torque))
+    out = np.empty((4, M))
+    for m in range(M):
+        load, phi = -td[m], -pd[m]
+        keep = load >= 0.5 * T1[m]
+        K1, K2, K3, _ = fit_three_segment(load[keep], phi[keep], T1[m], T2[m])
+        out[:, m] = K1, K2, K3, three_segment_twist(TN[m], T1[m], T2[m], K1, K2, K3)
+    return out
+
+
+def locked_metrics(names, torque, twist, levels, n, T1, T2, rated_torque) -> dict:
+    """The requested metric groups, SI values converted to the contract's units."""
+    out: dict[str, np.ndarray] = {}
+    amplitude = float(np.max(levels))
+    for name in names:
+        if name == "lost_motion":
+            out["lost_motion_arcmin"] = rad_to_arcmin(lost_motion_full_span(twist, levels, n))
+        elif name == "hysteresis_loss":
+            out["hysteresis_loss_arcmin"] = rad_to_arcmin(hysteresis_loss(torque, twist, levels, n))
+        elif name == "lost_motion_centre_line":
+            level = 0.04 * np.asarray(rated_torque)
+            if 0.04 < amplitude:
+                out["lost_motion_centre_line_arcmin"] = rad_to_arcmin(
+                    lost_motion_centre_line(torque, twist, levels, n, level))
+        elif name == "stiffness":
+            K1, K2, K3, phi_rated = stiffness_fit(torque, twist, levels, n, T1, T2, rated_torque)
+            out.update(K1_Nm_per_rad=K1, K2_Nm_per_rad=K2, K3_Nm_per_rad=K3,
+                       torsion_at_rated_arcmin=rad_to_arcmin(phi_rated))
+            tips = lost_motion_full_span(twist, levels, n)
+            out["torsion_at_rated_tip_arcmin"] = rad_to_arcmin(0.5 * tips)
+        else:
+            raise ValueError(f"unknown metric group {name}")
+    return out
+
+
+METRIC_GROUPS = ("lost_motion", "hysteresis_loss", "lost_motion_centre_line", "stiffness")

@@ -1,0 +1,1 @@
+"""Pure, vectorised laws, one function per published closed form or constitutive law."""

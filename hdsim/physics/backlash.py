@@ -1,0 +1,58 @@
+"""Dead-zone backlash laws."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def dead_zone(twist, half_gap):
+    """Seed paper eq. (2): ``δ − b_s`` above ``b_s``, 0 inside, ``δ + b_s`` below [rad]."""
+    return np.where(twist > half_gap, twist - half_gap,
+                    np.where(twist < -half_gap, twist + half_gap, 0.0))
+
+
+def smooth_dead_zone(twist, half_gap, width):
+    """:func:`dead_zone` with its corners rounded over ``width`` [rad] (softplus).
+
+    The rounding is a stiffening contact over ``width``, the way real flanks come
+    into contact; it keeps the Jacobian continuous so the implicit solver does not
+    chatter at contact.
+    """
+    def softplus(x):
+        z = x / width
+        return width * (np.maximum(z, 0.0) + np.log1p(np.exp(-np.abs(z))))
+
+    return softplus(twist - half_gap) - softplus(-twist - half_gap)
+
+
+def smooth_contact(twist, half_gap, width):
+    """d(smooth_dead_zone)/d(twist): 0 in the gap, 1 in contact [-]."""
+    return 1.0 + 0.5 * (np.tanh(0.5 * (twist - half_gap) / width) + np.tanh(0.5 * (-twist - half_gap) / width))
+
+
+def elasto_backlash_torque(spring_torque, damping_torque):
+    """Contact torque of a spring-damper behind a dead zone (Modelica ElastoBacklash).
+
+    ``spring_torque`` is the spring law evaluated at the dead-zone twist (zero in the
+    gap), ``damping_torque`` the viscous part ``d·ω``. In contact the damping part never
+    exceeds the spring part and the contact never pulls, so the torque is continuous
+    (zero) at contact onset. The contact side is the sign of the spring torque.
+    Modelica Standard Library, ``Mechanics.Rotational.Components.ElastoBacklash``.
+    """
+    pos = spring_torque + np.minimum(spring_torque, damping_torque)
+    neg = spring_torque + np.maximum(spring_torque, damping_torque)
+    pos = np.where(spring_torque + damping_torque < 0.0, 0.0, pos)
+    neg = np.where(spring_torque + damping_torque > 0.0, 0.0, neg)
+    return np.where(spring_torque > 0.0, pos, np.where(spring_torque < 0.0, neg, 0.0))
+
+
+def smooth_elasto_backlash_torque(spring_torque, damping_torque):
+    """ElastoBacklash's contact rule made smooth: ``τ_c + |τ_c| tanh(τ_d / |τ_c|)``.
+
+    As in :func:`elasto_backlash_torque` the damping part stays within ``±|τ_c|``, so
+    the contact never pulls and the torque vanishes with the spring torque at contact
+    onset; the hard ``min``/``max`` clip becomes a tanh so the Jacobian stays
+    continuous and an implicit solver does not chatter at contact.
+    """
+    limit = np.maximum(np.abs(spring_torque), 1e-300)
+    return spring_torque + limit * np.tanh(damping_torque / limit)

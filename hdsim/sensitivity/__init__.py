@@ -1,0 +1,24 @@
+"""Generic Sobol' sensitivity analysis for any picklable model ``f(X) -> y``.
+
+Modules: :mod:`.problem` (inputs), :mod:`.design` (sampling and structure checks),
+:mod:`.evaluate` (local/any-executor evaluation by row index), :mod:`.store`
+(resumable HDF5 studies), :mod:`.analysis` (indices, both interval kinds,
+convergence), :mod:`.checks` (consistency safeguards), :mod:`.functions`
+(closed forms with analytic indices), :mod:`.plots` (figures), :mod:`.study`
+(the whole study).
+"""
+
+from hdsim.sensitivity.analysis import analyse, convergence, estimates
+from hdsim.sensitivity.checks import consistency_checks
+from hdsim.sensitivity.design import DesignError, check_design, fingerprint
+from hdsim.sensitivity.evaluate import Evaluation, ModelError, evaluate, open_executor
+from hdsim.sensitivity.functions import FUNCTIONS, GFunction, Ishigami, Linear, get_function
+from hdsim.sensitivity.problem import Problem, build_problem, uniform
+from hdsim.sensitivity.study import StudyResult, run_study
+
+__all__ = [
+    "analyse", "convergence", "estimates", "consistency_checks", "DesignError",
+    "check_design", "fingerprint", "Evaluation", "ModelError", "evaluate", "open_executor",
+    "FUNCTIONS", "GFunction", "Ishigami", "Linear", "get_function", "Problem",
+    "build_problem", "uniform", "StudyResult", "run_study",
+]

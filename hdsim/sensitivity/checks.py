@@ -1,0 +1,66 @@
+"""Consistency safeguards on a set of Sobol' indices (reference §5).
+
+Generic truths for independent inputs, each tested with a tolerance that adds the
+estimate's own replicate half-widths (in quadrature) to a fixed ``tol``:
+
+* ΣS ≤ 1 + tol and ΣST ≥ 1 − tol,
+* S_i ≤ ST_i + tol (first order never exceeds total),
+* ST_i − S_i ≤ 1 − ΣS + tol (interactions of i fit in what main effects leave),
+* S_i ≥ −tol (negative beyond noise means N is too small).
+
+Two flags point at the mistakes these checks are blind to: a model that looks
+additive (ΣS ≈ 1) yet has ST ≠ S — impossible for a correct design — and "every
+input total ≈ 1 with no main effects", the signature of outputs not paired with
+their rows (or a pure-interaction model).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def consistency_checks(S1, ST, S1_half=None, ST_half=None, names=None, tol=0.02) -> dict:
+    """Run the safeguards; return ``{"ok", "tol", "sum_S1", "sum_ST", "interaction_share",
+    "items": [...], "flags": [...]}`` (JSON-ready)."""
+    S1, ST = np.asarray(S1, float), np.asarray(ST, float)
+    h1 = np.zeros_like(S1) if S1_half is None else np.asarray(S1_half, float)
+    hT = np.zeros_like(ST) if ST_half is None else np.asarray(ST_half, float)
+    names = list(names) if names is not None else [f"x{i + 1}" for i in range(len(S1))]
+    sum1, sumT = float(S1.sum()), float(ST.sum())
+    tol1, tolT = tol + float(np.sqrt(np.sum(h1**2))), tol + float(np.sqrt(np.sum(hT**2)))
+    items = [_item("sum(S1) <= 1 + tol", sum1, 1 + tol1, sum1 <= 1 + tol1),
+             _item("sum(ST) >= 1 - tol", sumT, 1 - tolT, sumT >= 1 - tolT)]
+    for i, name in enumerate(names):
+        pair = tol + float(np.hypot(h1[i], hT[i]))
+        items.append(_item(f"S1[{name}] <= ST[{name}] + tol", float(S1[i]),
+                           float(ST[i]) + pair, S1[i] <= ST[i] + pair))
+        gap, room = float(ST[i] - S1[i]), 1 - sum1 + tol1 + pair - tol
+        items.append(_item(f"ST[{name}] - S1[{name}] <= 1 - sum(S1) + tol", gap, room,
+                           gap <= room))
+        items.append(_item(f"S1[{name}] >= -tol", float(S1[i]), -(tol + h1[i]),
+                           S1[i] >= -(tol + h1[i])))
+    flags = []
+    gaps = ST - S1
+    if sum1 >= 1 - tol1 and np.any(gaps > tol + np.hypot(h1, hT)):
+        worst = names[int(np.argmax(gaps))]
+        flags.append(f"model looks additive (sum S1 = {sum1:.3f}) but ST != S1 "
+                     f"(ST - S1 = {gaps.max():.3f} for {worst}): the design or the row "
+                     "pairing is broken")
+    if len(S1) >= 2 and abs(sum1) < 0.1 and np.all(ST > 0.8):
+        flags.append(f"every input has total index near 1 and no main effect "
+                     f"(sum S1 = {sum1:.3f}, sum ST = {sumT:.3f}): outputs not paired with "
+                     "their rows, or a pure-interaction model")
+    return {"ok": bool(all(it["ok"] for it in items) and not flags), "tol": tol,
+            "sum_S1": sum1, "sum_ST": sumT, "interaction_share": 1 - sum1,
+            "items": items, "flags": flags}
+
+
+def _item(check, value, limit, ok) -> dict:
+    return {"check": check, "value": float(value), "limit": float(limit), "ok": bool(ok)}
+
+
+def failed_messages(checks: dict) -> list[str]:
+    """One line per failed check or flag (for stderr)."""
+    lines = [f"check failed: {it['check']} (value {it['value']:.4g}, limit {it['limit']:.4g})"
+             for it in checks["items"] if not it["ok"]]
+    return lines + [f"warning: {flag}" for flag in checks["flags"]]

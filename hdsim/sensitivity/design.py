@@ -1,0 +1,164 @@
+"""The Saltelli/Sobol' design: sampling, replicate seeds and the structure check.
+
+Layout of one *block* (one base point of the Sobol' sequence), as
+:func:`SALib.sample.sobol.sample` writes it::
+
+    A, AB_1 … AB_D, [BA_1 … BA_D,] B        (D + 2 or 2D + 2 rows)
+
+A study is ``R`` independent replicates, each a scrambled design of ``N / R`` base
+points with its own seed derived from the base seed. Rows are numbered
+replicate-major: row ``g`` is row ``g % M`` of replicate ``g // M``, where
+``M = (N / R) * block_size``. The analyser never trusts row order alone: every block
+is checked here, and every output carries a fingerprint of the inputs it was
+computed from (:func:`fingerprint`).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from hdsim.errors import InputError
+
+
+class DesignError(InputError):
+    """The samples or outputs do not have the A/AB/BA/B structure the estimator needs."""
+
+
+def block_size(num_vars: int, second_order: bool) -> int:
+    """Rows per base point: ``D + 2``, or ``2D + 2`` with second order."""
+    return 2 * num_vars + 2 if second_order else num_vars + 2
+
+
+def is_power_of_two(n: int) -> bool:
+    return isinstance(n, (int, np.integer)) and n > 0 and (n & (n - 1)) == 0
+
+
+def check_sizes(n: int, replicates: int) -> int:
+    """Validate ``N`` and ``R``; return the base points per replicate ``N / R``."""
+    if not is_power_of_two(n):
+        raise InputError(f"--n must be a power of 2 (Sobol' balance), got {n}; "
+                         f"nearest: {_nearest_pow2(n)}")
+    if not is_power_of_two(replicates) or replicates < 2:
+        raise InputError(f"--replicates must be a power of 2 and at least 2, got {replicates}")
+    if n < 4 * replicates:
+        raise InputError(f"--n {n} is too small for {replicates} replicates: "
+                         f"need N >= {4 * replicates} (4 base points per replicate)")
+    return n // replicates
+
+
+def _nearest_pow2(n) -> int:
+    try:
+        n = max(int(n), 1)
+    except (TypeError, ValueError):
+        return 1024
+    return 1 << max(0, round(np.log2(n)))
+
+
+def replicate_seed(seed: int, replicate: int) -> int:
+    """Scramble seed of one replicate, derived from the study seed.
+
+    ``SeedSequence`` spawning gives statistically independent streams for every
+    ``(seed, replicate)``, and is the same on every machine and executor.
+    """
+    ss = np.random.SeedSequence(int(seed), spawn_key=(int(replicate),))
+    return int(ss.generate_state(1, dtype=np.uint32)[0])
+
+
+def sample_replicate(problem, n_base: int, seed: int, second_order: bool,
+                     start: int = 0) -> np.ndarray:
+    """Scaled design rows of base points ``start … start + n_base - 1`` of one replicate.
+
+    SALib's design is extensible: with the same seed, the ``n_base`` design is the
+    first rows of the ``2 * n_base`` design, so doubling N reuses every earlier run.
+    A slice (``start > 0``) uses SALib's ``skip_values``, which fast-forwards the same
+    scrambled sequence; the store builds big designs piece by piece this way, so
+    memory does not grow with N (tests check pieces == whole).
+    """
+    from SALib.sample import sobol
+
+    with warnings.catch_warnings():
+        # SALib warns when skip_values is not a power of 2 or is below N: advice for
+        # users who skip points as a design choice. Here it only cuts the very same
+        # sequence into pieces, so those warnings (and scipy's balance note) are moot.
+        warnings.filterwarnings("ignore", message="(?s).*(balance properties|skip_values|"
+                                "Convergence).*")
+        return sobol.sample(problem.to_salib(), int(n_base), calc_second_order=second_order,
+                            scramble=True, seed=int(seed), skip_values=int(start))
+
+
+def fingerprint(X: np.ndarray) -> np.ndarray:
+    """A 64-bit hash of every row's exact bytes (FNV-1a style, vectorised).
+
+    Workers return it with each output, computed from the inputs the model actually
+    received; the analyser compares it with the design row the output is filed
+    under. Any mix-up of outputs and rows (completion order, shifted chunks) is then
+    caught, whatever the model.
+    """
+    X = np.ascontiguousarray(np.atleast_2d(X), dtype=np.float64)
+    u = X.view(np.uint64)
+    h = np.full(len(X), 0xCBF29CE484222325, dtype=np.uint64)
+    prime = np.uint64(0x100000001B3)
+    with np.errstate(over="ignore"):
+        for j in range(u.shape[1]):
+            h ^= u[:, j]
+            h *= prime
+            h ^= h >> np.uint64(29)
+    return h
+
+
+def check_design(X: np.ndarray, num_vars: int, second_order: bool) -> None:
+    """Raise :class:`DesignError` unless every block has the Saltelli structure.
+
+    AB_i must equal A in every column except i and equal B in column i; BA_i the
+    reverse. Scaling is column-wise and deterministic, so exact equality holds.
+    """
+    D, k = num_vars, block_size(num_vars, second_order)
+    X = np.asarray(X)
+    if X.ndim != 2 or X.shape[1] != D or len(X) % k:
+        raise DesignError(f"design has shape {X.shape}; expected (n * {k}, {D}) "
+                          f"for {D} parameters{' with second order' if second_order else ''}")
+    blocks = X.reshape(-1, k, D)
+    A, B = blocks[:, 0, :], blocks[:, k - 1, :]
+    eye = np.eye(D, dtype=bool)
+    expect_ab = np.where(eye[None], B[:, None, :], A[:, None, :])  # (nb, D, D)
+    _compare(blocks[:, 1:D + 1, :], expect_ab, k, offset=1, label="AB")
+    if second_order:
+        expect_ba = np.where(eye[None], A[:, None, :], B[:, None, :])
+        _compare(blocks[:, D + 1:2 * D + 1, :], expect_ba, k, offset=D + 1, label="BA")
+
+
+def _compare(got, expect, k, offset, label):
+    bad = ~((got == expect) | (np.isnan(got) & np.isnan(expect)))
+    if bad.any():
+        b, i, j = map(int, np.argwhere(bad)[0])
+        raise DesignError(
+            f"design row {b * k + offset + i} ({label}_{i + 1} of block {b}) differs from "
+            f"its A/B rows in column {j}: not a Saltelli design (was X altered or mixed up?)")
+
+
+def check_keys(X: np.ndarray, keys: np.ndarray, done: np.ndarray) -> None:
+    """Raise :class:`DesignError` if an output was computed for other inputs than its row."""
+    done = np.asarray(done, dtype=bool)
+    mismatch = done & (fingerprint(X) != np.asarray(keys, dtype=np.uint64))
+    if mismatch.any():
+        rows = np.flatnonzero(mismatch)
+        raise DesignError(
+            f"{len(rows)} outputs are filed under rows whose inputs they were not computed "
+            f"from (first: row {rows[0]}); outputs must be matched to rows by index, "
+            f"never by completion order")
+
+
+def valid_blocks(ok: np.ndarray, k: int) -> np.ndarray:
+    """Boolean per block: True when all its ``k`` rows have a good output."""
+    return np.asarray(ok, dtype=bool).reshape(-1, k).all(axis=1)
+
+
+def first_order_view(Y: np.ndarray, num_vars: int, second_order: bool) -> np.ndarray:
+    """Drop the BA rows of every block, giving the ``D + 2`` layout (for S1/ST only)."""
+    if not second_order:
+        return Y
+    D = num_vars
+    blocks = np.asarray(Y).reshape(-1, 2 * D + 2)
+    return np.concatenate([blocks[:, :D + 1], blocks[:, -1:]], axis=1).reshape(-1)

@@ -1,0 +1,73 @@
+"""Resolve what a study evaluates: a simulator unit, a closed form, or a user callable.
+
+Each resolver returns ``(func, problem, output, model_description, analytic)``;
+``model_description`` is stored in the study file so ``--resume`` refuses to
+continue a study with another model.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+from hdsim.errors import InputError
+from hdsim.sensitivity.functions import get_function
+from hdsim.sensitivity.problem import build_problem
+
+
+def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, dists=None):
+    """Study of simulator ``unit``: parameters by dotted name, ``output`` a metric.
+
+    Calls :func:`hdsim.batch.nominal_values` and :func:`hdsim.batch.model_function`
+    (imported lazily: the simulator is only needed for unit studies).
+    """
+    if not output:
+        raise InputError("--unit studies need --output METRIC (e.g. lost_motion_arcmin)")
+    if range_frac is None:  # validate explicit bounds before touching the simulator
+        problem = build_problem(names, {}, None, bounds, dists)
+        batch = _batch()
+    else:
+        batch = _batch()
+        problem = build_problem(names, batch.nominal_values(unit, list(names)), range_frac,
+                                bounds, dists)
+    func = batch.model_function(unit, list(names), output, scenario)
+    model = {"unit": unit, "output": output, "scenario": scenario}
+    return func, problem, output, model, None
+
+
+def from_function(name, output=None):
+    """A closed-form test function and its own input distributions."""
+    f = get_function(name)
+    return f, f.problem(), output or name, {"function": name}, f.analytic()
+
+
+def from_import(spec, names, output=None, range_frac=None, bounds=None, dists=None):
+    """``MODULE:ATTR`` naming a picklable ``f(X) -> y`` (a class is instantiated).
+
+    Its inputs come from ``--params`` with ``--bounds`` (or ``--dist norm:MEAN:SD``);
+    a ``nominal`` dict attribute on the callable enables ``--range``.
+    """
+    module_name, _, attr = spec.partition(":")
+    if not module_name or not attr:
+        raise InputError(f"--model expects MODULE:CALLABLE, got '{spec}'")
+    try:
+        obj = getattr(importlib.import_module(module_name), attr)
+    except (ImportError, AttributeError) as exc:
+        raise InputError(f"--model {spec}: {exc}") from None
+    func = obj() if isinstance(obj, type) else obj
+    if not callable(func):
+        raise InputError(f"--model {spec} is not callable")
+    if not names:
+        raise InputError("--model needs --params NAME,NAME,...")
+    nominal = dict(getattr(func, "nominal", {}) or {})
+    problem = build_problem(names, nominal, range_frac, bounds, dists)
+    return func, problem, output or attr, {"model": spec, "output": output}, None
+
+
+def _batch():
+    try:
+        return importlib.import_module("hdsim.batch")
+    except ModuleNotFoundError as exc:
+        if exc.name != "hdsim.batch":
+            raise
+        raise RuntimeError("--unit studies need hdsim.batch (the simulator's batch "
+                           "interface), which is not in this installation") from None

@@ -1,0 +1,206 @@
+"""Study inputs: parameter names, bounds and distributions.
+
+A :class:`Problem` is the model-agnostic half of a Sobol study. It maps one-to-one
+onto SALib's problem dictionary (``names``, ``bounds``, ``dists``) and can be
+built from nominal values with ``--range 10%`` or from explicit ``--bounds``.
+
+Distributions (SALib names):
+
+``unif``
+    uniform on ``[lo, hi]``.
+``logunif``
+    log-uniform on ``[lo, hi]``, both > 0.
+``norm``
+    normal; SALib stores ``[mean, sd]`` in place of the bounds.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from hdsim.errors import InputError, unknown_name
+
+DISTS = ("unif", "logunif", "norm")
+_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+
+
+@dataclass(frozen=True)
+class Problem:
+    """Names, bounds (or ``[mean, sd]`` for ``norm``) and distributions of the inputs."""
+
+    names: tuple[str, ...]
+    bounds: tuple[tuple[float, float], ...]
+    dists: tuple[str, ...]
+
+    def __post_init__(self):
+        if not self.names:
+            raise InputError("a Sobol study needs at least one parameter")
+        if len(set(self.names)) != len(self.names):
+            raise InputError(f"duplicate parameter names in {', '.join(self.names)}")
+        if not len(self.names) == len(self.bounds) == len(self.dists):
+            raise InputError("names, bounds and dists must have the same length")
+        for name, (lo, hi), dist in zip(self.names, self.bounds, self.dists):
+            _check_one(name, lo, hi, dist)
+
+    @property
+    def num_vars(self) -> int:
+        return len(self.names)
+
+    def to_salib(self) -> dict:
+        """The problem dictionary SALib's sampler and analyser take."""
+        return {
+            "num_vars": self.num_vars,
+            "names": list(self.names),
+            "bounds": [list(b) for b in self.bounds],
+            "dists": list(self.dists),
+        }
+
+    def to_dict(self) -> dict:
+        """JSON-friendly form, stored in the study file and compared on resume."""
+        return {"names": list(self.names), "bounds": [list(b) for b in self.bounds],
+                "dists": list(self.dists)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "Problem":
+        return cls(tuple(d["names"]), tuple(tuple(float(v) for v in b) for b in d["bounds"]),
+                   tuple(d["dists"]))
+
+    def variances(self) -> np.ndarray:
+        """Variance of each input under its distribution [unit of the input squared]."""
+        return np.array([input_variance(d, lo, hi)
+                         for (lo, hi), d in zip(self.bounds, self.dists)])
+
+
+def uniform(names, bounds) -> Problem:
+    """A problem with every input uniform on its ``(lo, hi)``."""
+    return Problem(tuple(names), tuple((float(lo), float(hi)) for lo, hi in bounds),
+                   ("unif",) * len(names))
+
+
+def _check_one(name, lo, hi, dist):
+    if dist not in DISTS:
+        raise unknown_name("distribution", dist, DISTS)
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise InputError(f"bounds of '{name}' must be finite numbers, got {lo}:{hi}")
+    if dist == "norm":
+        if hi <= 0:
+            raise InputError(f"normal '{name}' needs a standard deviation > 0, got {hi}")
+    elif not lo < hi:
+        raise InputError(f"bounds of '{name}' must have lo < hi, got {lo}:{hi}")
+    elif dist == "logunif" and lo <= 0:
+        raise InputError(f"log-uniform '{name}' needs bounds > 0, got {lo}:{hi}")
+
+
+def input_variance(dist: str, a: float, b: float) -> float:
+    """Variance of one input; ``(a, b)`` are bounds, or mean and sd for ``norm``."""
+    if dist == "unif":
+        return (b - a) ** 2 / 12.0
+    if dist == "norm":
+        return b**2
+    if dist == "logunif":  # x = exp(u), u ~ U(ln a, ln b)
+        L = math.log(b / a)
+        m1, m2 = (b - a) / L, (b**2 - a**2) / (2 * L)
+        return m2 - m1**2
+    raise unknown_name("distribution", dist, DISTS)
+
+
+def parse_range(text: str) -> float:
+    """``'10%'`` -> 0.10: the half-width of the interval as a fraction of nominal."""
+    m = re.fullmatch(rf"\s*({_NUMBER})\s*%\s*", text or "")
+    if not m:
+        raise InputError(f"--range must look like '10%', got '{text}'")
+    frac = float(m.group(1)) / 100.0
+    if not 0 < frac < 10:
+        raise InputError(f"--range must be between 0% and 1000% (exclusive), got '{text}'")
+    return frac
+
+
+def parse_assignments(items, option: str) -> dict[str, str]:
+    """``['a=1:2', 'b=3:4']`` -> ``{'a': '1:2', 'b': '3:4'}`` (one line error otherwise)."""
+    out = {}
+    for item in items or ():
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip() or not value.strip():
+            raise InputError(f"{option} expects NAME=VALUE, got '{item}'")
+        out[name.strip()] = value.strip()
+    return out
+
+
+def parse_bounds(text: str, name: str) -> tuple[float, float]:
+    """``'0.5e-3:0.7e-3'`` -> ``(0.0005, 0.0007)``."""
+    m = re.fullmatch(rf"({_NUMBER}):({_NUMBER})", text.replace(" ", ""))
+    if not m:
+        raise InputError(f"--bounds {name}= expects LO:HI (two numbers), got '{text}'")
+    return float(m.group(1)), float(m.group(2))
+
+
+def build_problem(names, nominal=None, range_frac=None, bounds=None, dists=None) -> Problem:
+    """Build a :class:`Problem` from nominal values and command-line style options.
+
+    Parameters
+    ----------
+    names : list of str
+        Parameter names, in study order.
+    nominal : dict, optional
+        Name -> nominal value (in the parameter's SI unit).
+    range_frac : float, optional
+        Half-width as a fraction of ``|nominal|`` (``0.1`` for ``--range 10%``). For a
+        ``norm`` input without explicit numbers it is the standard deviation instead.
+    bounds : dict, optional
+        Name -> ``'LO:HI'`` text; overrides the range for that parameter.
+    dists : dict, optional
+        Name -> ``'unif'``, ``'logunif'``, ``'norm'`` or ``'norm:MEAN:SD'``.
+    """
+    names = list(names)
+    nominal, bounds, dists = dict(nominal or {}), dict(bounds or {}), dict(dists or {})
+    for option, given in (("--bounds", bounds), ("--dist", dists)):
+        for name in given:
+            if name not in names:
+                raise unknown_name(f"parameter in {option}", name, names)
+    out_bounds, out_dists = [], []
+    for name in names:
+        dist, explicit = _parse_dist(dists.get(name, "unif"), name)
+        if explicit is None and name in bounds:
+            if dist == "norm":  # LO:HI would silently become MEAN:SD in SALib
+                raise InputError(f"'{name}' is normal: give --dist {name}=norm:MEAN:SD "
+                                 f"instead of --bounds")
+            explicit = parse_bounds(bounds[name], name)
+        if explicit is None:
+            explicit = _from_range(name, nominal, range_frac, dist)
+        out_bounds.append(explicit)
+        out_dists.append(dist)
+    return Problem(tuple(names), tuple(out_bounds), tuple(out_dists))
+
+
+def _parse_dist(text: str, name: str):
+    kind, _, rest = text.partition(":")
+    if kind not in DISTS:
+        raise unknown_name(f"distribution for '{name}'", kind, DISTS)
+    if not rest:
+        return kind, None
+    if kind != "norm":
+        raise InputError(f"--dist {name}={text}: only 'norm' takes numbers (norm:MEAN:SD)")
+    m = re.fullmatch(rf"({_NUMBER}):({_NUMBER})", rest.replace(" ", ""))
+    if not m:
+        raise InputError(f"--dist {name}= expects norm:MEAN:SD, got '{text}'")
+    return kind, (float(m.group(1)), float(m.group(2)))
+
+
+def _from_range(name, nominal, frac, dist):
+    if frac is None:
+        raise InputError(f"no bounds for '{name}': give --range P% or --bounds {name}=LO:HI")
+    if name not in nominal:
+        raise InputError(f"no nominal value for '{name}' to apply --range to; "
+                         f"give --bounds {name}=LO:HI")
+    x0 = float(nominal[name])
+    if x0 == 0 or not math.isfinite(x0):
+        raise InputError(f"'{name}' has nominal {x0}: a ±% range needs a finite non-zero "
+                         f"nominal; give --bounds {name}=LO:HI")
+    if dist == "norm":
+        return x0, abs(x0) * frac  # one standard deviation = the range
+    lo, hi = sorted((x0 * (1 - frac), x0 * (1 + frac)))
+    return lo, hi

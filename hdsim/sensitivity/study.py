@@ -1,0 +1,201 @@
+"""Run a whole Sobol' study: design, evaluation into the store, analysis, checks.
+
+:func:`run_study` is what ``hdsim sobol`` calls; it is also the Python entry point
+for any picklable model ``f(X: (n, d)) -> (n,)``.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from hdsim.errors import InputError
+from hdsim.sensitivity.analysis import check_outputs, convergence, indices
+from hdsim.sensitivity.checks import consistency_checks, failed_messages
+from hdsim.sensitivity.design import check_sizes
+from hdsim.sensitivity.evaluate import evaluate
+from hdsim.sensitivity.store import DONE, PENDING, open_store
+
+MAX_LISTED_FAILURES = 20
+
+
+@dataclass
+class StudyResult:
+    """Everything a study produced; :meth:`to_json` gives the ``hdsim sobol`` object."""
+
+    problem: object
+    n: int
+    second_order: bool
+    replicates: int
+    analysis: dict
+    checks: dict
+    convergence: list
+    failures: list
+    evaluations: int            # model evaluations on record for the analysed N
+    evaluated_now: int          # performed by this call (0 when all rows were on disk)
+    seconds: float
+    study: str | None = None
+    extra: dict = field(default_factory=dict)
+
+    def to_json(self, output: str) -> dict:
+        names, a = list(self.problem.names), self.analysis
+        per = lambda v: {nm: _num(x) for nm, x in zip(names, v)}  # noqa: E731
+        out = {"output": output, "n": self.n, "evaluations": self.evaluations,
+               "params": names, "S1": per(a["S1"]), "S1_conf": per(a["S1_conf"]),
+               "ST": per(a["ST"]), "ST_conf": per(a["ST_conf"]),
+               "seconds": round(self.seconds, 3), "study": self.study,
+               "S1_conf_replicates": per(a["S1_conf_replicates"]),
+               "ST_conf_replicates": per(a["ST_conf_replicates"]),
+               "conf_level": self.extra.get("conf_level", 0.95),
+               "replicates": self.replicates, "second_order": self.second_order,
+               "evaluated_now": self.evaluated_now,
+               "blocks_used": a["blocks_used"], "blocks_dropped": a["blocks_dropped"],
+               "failures": self.failures, "checks": self.checks,
+               "convergence": [_conv_json(row, names) for row in self.convergence]}
+        if self.second_order:
+            for key in ("S2", "S2_conf", "S2_conf_replicates"):
+                out[key] = _pairs(a[key], names)
+        return {**out, **{k: v for k, v in self.extra.items() if k not in out}}
+
+
+def run_study(func, problem, n, *, seed=0, second_order=False, replicates=4, executor=None,
+              workers=2, chunksize=None, out=None, resume=False, retry_failed=False,
+              target_width=None, model=None, conf_level=0.95, num_resamples=100,
+              progress=True, log=None) -> StudyResult:
+    """Sample, evaluate (resumably), check and analyse a Sobol' study.
+
+    Parameters
+    ----------
+    func : callable
+        Picklable ``f(X: (n, d)) -> (n,)``; NaN or an exception marks a failed row.
+    problem : Problem
+    n : int
+        Base points N (power of 2), split into ``replicates`` scrambles of N/R.
+        With ``target_width`` it is the most the study may grow to.
+    executor : concurrent.futures.Executor, optional
+        None: a local pool of ``workers`` processes (``workers == 1``: in-process).
+    out : path, optional
+        HDF5 study file; every finished chunk is flushed to it.
+    resume : bool
+        Continue ``out`` (must hold the same definition; a larger N extends it).
+    target_width : float, optional
+        Stop doubling N once every replicate interval (full width) of S1 and ST is
+        narrower than this.
+    model : dict, optional
+        Description of the model stored with the definition (resume refuses a
+        different one), e.g. ``{"function": "ishigami"}``.
+    """
+    t0, log = time.perf_counter(), log or _stderr
+    check_sizes(n, replicates)
+    if target_width is not None and not target_width > 0:
+        raise InputError(f"--target-width must be > 0, got {target_width}")
+    definition = {"problem": problem.to_dict(), "seed": int(seed),
+                  "second_order": bool(second_order), "replicates": int(replicates),
+                  "model": model or {}}
+    store = open_store(definition, n, out, resume)
+    evaluated_now = 0
+    try:
+        before = store.counts(n)
+        for n_stage in _stages(n, replicates, target_width):
+            rows = store.pending(n_stage, retry_failed)
+            if len(rows):
+                ev = evaluate(func, store.reader(rows), executor, workers=workers,
+                              chunksize=chunksize, rows=rows, on_chunk=store.write,
+                              progress=progress)
+                evaluated_now += ev.evaluations
+            res, width = _analyse_store(store, n_stage, conf_level, num_resamples, seed)
+            if target_width is not None:
+                log(f"N = {n_stage}: widest replicate interval {width:.4f} "
+                    f"(target {target_width})")
+                if width < target_width:
+                    break
+        failures = _failure_records(store, n_stage)
+        prefix = store.prefix_rows(n_stage)
+        conv = convergence(problem, store.read("Y", prefix), second_order=second_order,
+                           replicates=replicates,
+                           evaluated=store.read("status", prefix) != PENDING,
+                           conf_level=conf_level, num_resamples=num_resamples, seed=seed)
+        counts = store.counts(n_stage)
+    finally:
+        # Failure messages are metadata: written only here, with no chunk in flight
+        # (also after Ctrl-C or a model that fails everywhere, to help the diagnosis).
+        store.save_failures()
+        store.close()
+    _report_failures(failures, store, log)
+    checks = consistency_checks(res["S1"], res["ST"], res["S1_conf_replicates"],
+                                res["ST_conf_replicates"], problem.names)
+    for line in failed_messages(checks):
+        log(line)
+    return StudyResult(problem, n_stage, bool(second_order), int(replicates), res, checks,
+                       conv, failures, counts["done"] + counts["failed"], evaluated_now,
+                       time.perf_counter() - t0, str(out) if out else None,
+                       {"conf_level": conf_level, "seed": int(seed),
+                        "reused": int(before["done"] + before["failed"])})
+
+
+def _stages(n, replicates, target_width):
+    if target_width is None:
+        return [n]
+    stage, stages = min(n, 16 * replicates), []
+    while stage <= n:
+        stages.append(stage)
+        stage *= 2
+    return stages
+
+
+def _analyse_store(store, n, conf_level, num_resamples, seed):
+    """Check the stored design piece by piece, then estimate from the outputs."""
+    d = store.definition
+    for _, X, Y, key, status in store.blocks(n):
+        if (status == PENDING).any():
+            raise RuntimeError(f"{int((status == PENDING).sum())} rows still pending")
+        check_outputs(store.problem, X, Y, d["second_order"], key, status != PENDING)
+    rows = store.prefix_rows(n)
+    Y, status = store.read("Y", rows), store.read("status", rows)
+    res = indices(store.problem, Y, (status == DONE) & np.isfinite(Y),
+                  second_order=d["second_order"], replicates=d["replicates"],
+                  conf_level=conf_level, num_resamples=num_resamples, seed=seed)
+    width = 2 * max(res["S1_conf_replicates"].max(), res["ST_conf_replicates"].max())
+    return res, float(width)
+
+
+def _failure_records(store, n) -> list[dict]:
+    failures = store.failures(n)
+    names = store.problem.names
+    records = []
+    for g, msg in sorted(failures.items()):
+        r, j = divmod(g, store.rows_per_replicate)
+        x = store.read("X", np.array([g]))[0]
+        records.append({"row": g, "replicate": r, "index": j, "block": j // store.k,
+                        "params": {nm: float(v) for nm, v in zip(names, x)}, "message": msg})
+    return records
+
+
+def _report_failures(failures, store, log):
+    for rec in failures[:MAX_LISTED_FAILURES]:
+        params = ", ".join(f"{k}={v:.6g}" for k, v in rec["params"].items())
+        log(f"warning: sample {rec['row']} ({store.sample_label(rec['row'])}) failed: "
+            f"{rec['message']} [{params}]; its block of {store.k} rows is dropped")
+    if len(failures) > MAX_LISTED_FAILURES:
+        log(f"warning: ... and {len(failures) - MAX_LISTED_FAILURES} more failed samples")
+
+
+def _stderr(line: str) -> None:
+    print(f"hdsim sobol: {line}", file=sys.stderr)
+
+
+def _num(x):
+    x = float(x)
+    return x if np.isfinite(x) else None
+
+
+def _pairs(M, names) -> dict:
+    return {a: {b: _num(M[i, j]) for j, b in enumerate(names) if j > i}
+            for i, a in enumerate(names[:-1])}
+
+
+def _conv_json(row, names) -> dict:
+    return {"n": row["n"], **{k: [_num(x) for x in row[k]] for k in row if k != "n"}}

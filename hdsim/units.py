@@ -1,0 +1,34 @@
+"""Unit conversions used only at the edges (CLI, files, figures). SI inside."""
+
+from __future__ import annotations
+
+import math
+
+ARCMIN_PER_RAD = 10800.0 / math.pi
+ARCSEC_PER_RAD = 648000.0 / math.pi
+DEG_PER_RAD = 180.0 / math.pi
+RAD_PER_S_PER_RPM = 2.0 * math.pi / 60.0
+
+
+def rad_to_arcmin(x):
+    return x * ARCMIN_PER_RAD
+
+
+def arcmin_to_rad(x):
+    return x / ARCMIN_PER_RAD
+
+
+def rad_to_arcsec(x):
+    return x * ARCSEC_PER_RAD
+
+
+def arcsec_to_rad(x):
+    return x / ARCSEC_PER_RAD
+
+
+def rpm_to_rad_per_s(x):
+    return x * RAD_PER_S_PER_RPM
+
+
+def rad_per_s_to_rpm(x):
+    return x / RAD_PER_S_PER_RPM

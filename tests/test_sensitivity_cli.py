@@ -1,0 +1,100 @@
+"""``hdsim sobol`` command line: contract JSON, figures, one-line errors."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from hdsim.cli import main
+
+CONTRACT_KEYS = {"output", "n", "evaluations", "params", "S1", "S1_conf", "ST", "ST_conf",
+                 "seconds", "study"}
+
+
+def _json(capsys, argv):
+    assert main(argv) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_function_json_follows_contract(capsys):
+    out = _json(capsys, ["sobol", "--function", "ishigami", "--n", "4096", "--workers", "1",
+                         "--json"])
+    assert CONTRACT_KEYS <= set(out)
+    assert out["output"] == "ishigami" and out["n"] == 4096 and out["evaluations"] == 20480
+    assert out["params"] == ["x1", "x2", "x3"] and out["study"] is None
+    for key in ("S1", "ST"):
+        assert max(abs(out[key][p] - out["analytic"][key][p]) for p in out["params"]) <= 0.02
+    assert set(out["S1_conf"]) == set(out["params"]) and out["checks"]["ok"]
+
+
+def test_second_order_evaluations_and_s2(capsys):
+    out = _json(capsys, ["sobol", "--function", "linear", "--n", "64", "--second-order",
+                         "--workers", "1", "--json"])
+    assert out["evaluations"] == 64 * (2 * 4 + 2)
+    assert set(out["S2"]) == {"x1", "x2", "x3"} and set(out["S2"]["x1"]) == {"x2", "x3", "x4"}
+
+
+def test_out_writes_study_summary_and_figures(tmp_path, capsys):
+    study = tmp_path / "g.h5"
+    out = _json(capsys, ["sobol", "--function", "gfunction", "--n", "256", "--workers", "1",
+                         "--out", str(study), "--json"])
+    assert out["study"] == str(study) and study.exists()
+    summary = json.loads((tmp_path / "g.json").read_text())
+    assert summary["S1"] == out["S1"]
+    assert all((tmp_path / name).stat().st_size > 1000
+               for name in ("g_indices.png", "g_convergence.png"))
+    again = _json(capsys, ["sobol", "--function", "gfunction", "--n", "256", "--workers", "1",
+                           "--out", str(study), "--resume", "--json"])
+    assert again["evaluated_now"] == 0 and again["S1"] == out["S1"]
+    report = tmp_path / "rep"
+    main(["sobol", "--function", "ishigami", "--n", "64", "--workers", "1",
+          "--report", str(report)])
+    text = capsys.readouterr().out
+    assert "x1" in text and (report / "sobol_indices.png").exists()
+
+
+@pytest.mark.parametrize("argv, fragment", [
+    (["--function", "nope"], "unknown function 'nope'"),
+    (["--function", "ishigami", "--n", "1000"], "power of 2"),
+    (["--function", "ishigami", "--n", "lots"], "--n expects an integer"),
+    (["--model", "hdsim.sensitivity.functions:Ishigami", "--params", "x1,x2,x3",
+      "--bounds", "x1=3:1", "x2=0:1", "x3=0:1"], "lo < hi"),
+    (["--model", "hdsim.sensitivity.functions:Ishigami", "--params", "x1,x2,x3",
+      "--bounds", "x1=zero:1"], "LO:HI"),
+    (["--model", "hdsim.sensitivity.functions:Ishigami", "--params", "x1,x2",
+      "--bounds", "x9=0:1"], "unknown parameter"),
+    (["--function", "ishigami", "--executor", "spark://x"], "--executor"),
+    (["--function", "ishigami", "--resume"], "--resume needs --out"),
+    ([], "say what to study"),
+])
+def test_bad_input_exits_2_with_one_line(argv, fragment, capsys):
+    assert main(["sobol", *argv, "--json"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1 and fragment in lines[0], captured.err
+
+
+def test_bad_input_in_a_subprocess_has_no_traceback():
+    proc = subprocess.run([sys.executable, "-m", "hdsim.cli", "sobol", "--function",
+                           "ishigami", "--n", "100", "--json"], capture_output=True, text=True)
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
+
+
+def test_unit_study_through_simulator(capsys):
+    import importlib.util
+
+    argv = ["sobol", "--unit", "CSG-25-100", "--params", "h_pz,h_c", "--range", "10%",
+            "--output", "lost_motion_arcmin", "--n", "16", "--replicates", "2",
+            "--workers", "1", "--json"]
+    if importlib.util.find_spec("hdsim.batch") is None:
+        # Until the simulator's batch interface lands: one line, exit 1, no traceback.
+        assert main(argv) == 1
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "hdsim.batch" in err[0]
+        return
+    out = _json(capsys, argv)
+    assert out["output"] == "lost_motion_arcmin" and out["evaluations"] == 16 * 4
+    assert out["params"] == ["h_pz", "h_c"] and out["checks"]["items"]
