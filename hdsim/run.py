@@ -49,6 +49,14 @@ def solver_options(scenario: Scenario, base: SolverOptions | None = None) -> Sol
 def run_scenario(model: HarmonicDrive, scenario: Scenario, *, samples_per_segment: int | None = None,
                  options: SolverOptions | None = None) -> Run:
     """Simulate ``scenario`` on ``model`` (single or batch) and compute its metrics."""
+    runner = RUNNERS[scenario.setup]
+    run = runner(model, scenario, samples_per_segment=samples_per_segment, options=options)
+    run.result.metadata.update(unit=model.name, scenario=scenario.name, hdsim_version=__version__)
+    return run
+
+
+def _run_locked(model: HarmonicDrive, scenario: Scenario, *, samples_per_segment: int | None = None,
+                options: SolverOptions | None = None) -> Run:
     for name in scenario.metrics:
         if name not in METRIC_GROUPS:
             raise unknown_name(f"metric in scenario {scenario.name}", name, METRIC_GROUPS)
@@ -60,5 +68,8 @@ def run_scenario(model: HarmonicDrive, scenario: Scenario, *, samples_per_segmen
     T1, T2 = breakpoints(model) if "stiffness" in scenario.metrics else (np.nan, np.nan)
     metrics = locked_metrics(scenario.metrics, result.signals["torque_Nm"], result.signals["twist_rad"],
                              scenario.levels(), n, T1, T2, rated)
-    result.metadata.update(unit=model.name, scenario=scenario.name, hdsim_version=__version__)
     return Run(model, scenario, result, metrics)
+
+
+#: one runner per bench set-up (hdsim.scenario.SETUP_SCHEMAS lists their tables)
+RUNNERS = {"locked_wave_generator": _run_locked}

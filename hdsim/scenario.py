@@ -30,14 +30,25 @@ import numpy as np
 from hdsim.errors import InputError, unknown_name
 from hdsim.profiles import cosine_ramps, segment_times
 
-SETUPS = ("locked_wave_generator",)
-
-_SCHEMA = {
+_COMMON = {
     "name": str, "description": str, "setup": str, "metrics": list,
-    "load": {"amplitude": float, "cycles": int, "rate": float},
     "output": {"samples_per_segment": int},
-    "solver": {"method": str, "rtol": float},
+    "solver": {"method": str, "rtol": float, "atol_scale": float, "max_step": float},
 }
+
+#: tables each bench set-up adds to the common schema; required keys are listed in
+#: ``_REQUIRED`` (a new set-up registers both here and a runner in hdsim.run)
+SETUP_SCHEMAS = {
+    "locked_wave_generator": {"load": {"amplitude": float, "cycles": int, "rate": float}},
+}
+_REQUIRED = {
+    "locked_wave_generator": {"load": ("amplitude", "cycles", "rate")},
+}
+SETUPS = tuple(SETUP_SCHEMAS)
+
+
+def schema_for(setup: str) -> dict:
+    return {**_COMMON, **SETUP_SCHEMAS.get(setup, {})}
 
 
 @dataclass(frozen=True)
@@ -48,14 +59,21 @@ class Scenario:
     source: str = "<dict>"
 
     def __post_init__(self):
-        _validate(self.data, _SCHEMA, self.source, "")
-        if self.setup not in SETUPS:
+        if not isinstance(self.data.get("name"), str):
+            raise InputError(f"{self.source}: missing 'name'")
+        if self.setup not in SETUP_SCHEMAS:
             raise unknown_name(f"setup in {self.source}", self.setup, SETUPS)
-        load = self.data["load"]
-        if not 0.0 < load["amplitude"] <= 5.0:
-            raise InputError(f"{self.source}: load.amplitude must be in (0, 5] (fraction of T_N)")
-        if load["cycles"] < 1 or load["rate"] <= 0:
-            raise InputError(f"{self.source}: load.cycles must be >= 1 and load.rate > 0")
+        _validate(self.data, schema_for(self.setup), self.source, "")
+        for table, keys in _REQUIRED[self.setup].items():
+            for key in keys:
+                if key not in self.data.get(table, {}):
+                    raise InputError(f"{self.source}: missing {table}.{key}")
+        if self.setup == "locked_wave_generator":
+            load = self.data["load"]
+            if not 0.0 < load["amplitude"] <= 5.0:
+                raise InputError(f"{self.source}: load.amplitude must be in (0, 5] (fraction of T_N)")
+            if load["cycles"] < 1 or load["rate"] <= 0:
+                raise InputError(f"{self.source}: load.cycles must be >= 1 and load.rate > 0")
 
     @property
     def name(self) -> str:
@@ -98,17 +116,18 @@ class Scenario:
     def with_updates(self, updates: dict) -> "Scenario":
         """A new scenario with ``{"load.rate": 0.1, ...}`` applied (dotted keys)."""
         data = copy.deepcopy(self.data)
+        full = schema_for(self.setup)
         for key, value in updates.items():
             *path, leaf = key.split(".")
             table = data
-            schema = _SCHEMA
+            schema = full
             for part in path:
                 if part not in schema or not isinstance(schema[part], dict):
-                    raise unknown_name("scenario key", key, _flat_keys(_SCHEMA))
+                    raise unknown_name("scenario key", key, _flat_keys(full))
                 schema = schema[part]
                 table = table.setdefault(part, {})
             if leaf not in schema or isinstance(schema[leaf], dict):
-                raise unknown_name("scenario key", key, _flat_keys(_SCHEMA))
+                raise unknown_name("scenario key", key, _flat_keys(full))
             table[leaf] = _coerce(value, schema[leaf], key, self.source)
         return Scenario(data, self.source)
 
@@ -149,13 +168,6 @@ def _validate(table, schema, source, prefix):
             _validate(value, schema[key], source, name + ".")
         else:
             table[key] = _coerce(value, schema[key], name, source)
-    for required in ("name", "load") if not prefix else ():
-        if required not in table:
-            raise InputError(f"{source}: missing '{required}'")
-    if prefix == "load.":
-        for required in ("amplitude", "cycles", "rate"):
-            if required not in table:
-                raise InputError(f"{source}: missing load.{required}")
 
 
 def load_scenario(path) -> Scenario:
@@ -170,3 +182,13 @@ def load_scenario(path) -> Scenario:
     except IsADirectoryError:
         raise InputError(f"{path}: is a directory, expected a scenario .toml file") from None
     return Scenario(data, str(path))
+
+
+def builtin_scenario_path(name: str) -> Path:
+    """``scenarios/NAME.toml`` of the checkout, or the copy shipped inside the package."""
+    here = Path(__file__).resolve().parent
+    for folder in (here.parent / "scenarios", here / "data" / "scenarios"):
+        candidate = folder / f"{name}.toml"
+        if candidate.is_file():
+            return candidate
+    raise InputError(f"no built-in scenario '{name}'")
