@@ -145,7 +145,8 @@ def evaluate(func, X, executor=None, *, workers=2, chunksize=None, rows=None,
     n = len(X)
     rows = np.arange(n) if rows is None else np.asarray(rows)
     out = Evaluation(np.full(n, np.nan), np.zeros(n, np.uint64), np.zeros(n, bool))
-    size = int(chunksize or default_chunksize(n))
+    # a model may say what chunk suits it (the simulator batches rows inside one solve)
+    size = int(chunksize or getattr(func, "chunksize", None) or default_chunksize(n))
     spans = [(s, min(s + size, n)) for s in range(0, n, size)]
     bar = _progress(n, progress)
     try:
