@@ -88,6 +88,10 @@ class FlexsplineGeometry:
         return {f.name: getattr(self, f.name) for f in fields(self)}
 
 
+def _unit(name: str) -> str:
+    return next(f.metadata["unit"] for f in fields(FlexsplineGeometry) if f.name == name)
+
+
 def _first_bad(condition) -> int | None:
     bad = np.atleast_1d(np.asarray(condition))
     if not bad.any():
@@ -107,8 +111,12 @@ def validate_geometry(g: FlexsplineGeometry) -> None:
     for name, v in values.items():
         i = _first_bad(~np.isfinite(v) | (v <= 0.0))
         if i is not None:
-            _fail(f"{name} must be a positive finite number, got {np.atleast_1d(v)[i]:g}", i, batched)
-    fmt = lambda x, i: f"{np.atleast_1d(x)[i] * 1e3:.4g} mm"  # noqa: E731
+            _fail(f"{name} must be a positive finite number, got {np.atleast_1d(v)[i]:g} {_unit(name)}",
+                  i, batched)
+    def fmt(x, i):
+        x = np.atleast_1d(x)
+        return f"{x[min(i, x.size - 1)] * 1e3:.4g} mm"
+
     checks = [
         (g.h_p >= g.h_pz, lambda i: f"undercut depth h_p = {fmt(g.h_p, i)} must be less than the "
                                     f"thickness under the teeth h_pz = {fmt(g.h_pz, i)}"),

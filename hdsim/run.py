@@ -71,5 +71,11 @@ def _run_locked(model: HarmonicDrive, scenario: Scenario, *, samples_per_segment
     return Run(model, scenario, result, metrics)
 
 
+def _run_driven(model, scenario, **kw) -> Run:
+    from hdsim.driven import run_driven  # imported on use: hdsim.driven imports this module
+
+    return run_driven(model, scenario, **kw)
+
+
 #: one runner per bench set-up (hdsim.scenario.SETUP_SCHEMAS lists their tables)
-RUNNERS = {"locked_wave_generator": _run_locked}
+RUNNERS = {"locked_wave_generator": _run_locked, "driven_wave_generator": _run_driven}

@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from hdsim.driven_schema import DRIVEN_REQUIRED, DRIVEN_SCHEMA
 from hdsim.errors import InputError, unknown_name
 from hdsim.profiles import cosine_ramps, segment_times
 
@@ -40,9 +41,11 @@ _COMMON = {
 #: ``_REQUIRED`` (a new set-up registers both here and a runner in hdsim.run)
 SETUP_SCHEMAS = {
     "locked_wave_generator": {"load": {"amplitude": float, "cycles": int, "rate": float}},
+    "driven_wave_generator": DRIVEN_SCHEMA,
 }
 _REQUIRED = {
     "locked_wave_generator": {"load": ("amplitude", "cycles", "rate")},
+    "driven_wave_generator": DRIVEN_REQUIRED,
 }
 SETUPS = tuple(SETUP_SCHEMAS)
 

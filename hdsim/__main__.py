@@ -1,0 +1,5 @@
+import sys
+
+from hdsim.cli import main
+
+sys.exit(main())
