@@ -89,6 +89,10 @@ def _build(name: str) -> HarmonicDrive:
                       J_in=bench["J_in_size25"] * scale**5, J_out=J_out)
     K1 = entry["K1"]
     fxd = data["effects"]
+    ke = data["kinematic_error"]  # amplitudes: shares of the catalog accuracy class (units.toml)
+    ke_class = arcmin_to_rad(ke["accuracy_arcmin"][name])
+    kinematic_error = fx.FourierKinematicError(**{k: v * ke_class for k, v in ke["share"].items()},
+                                               **ke["phases"], load_gain=ke["load_gain"])
     return HarmonicDrive(
         name=name, geometry=geometry, wave_generator=wave_generator, drive=drive,
         calibration=Calibration(kappa_mesh=kappa),
@@ -97,6 +101,7 @@ def _build(name: str) -> HarmonicDrive:
         friction=fx.DahlSlip(slip_torque=fxd["slip_torque_per_TN"] * entry["rated_torque"],
                              slip_max=arcmin_to_rad(fxd["slip_arcmin"])),
         damping=fx.ViscousDamping(coefficient=2.0 * bench["damping_ratio"] * np.sqrt(K1 * J_out)),
+        kinematic_error=kinematic_error,
         provenance={"catalog": entry, "calibration": {"kappa_mesh": kappa, "e2": e2, "e3": e3},
                     "geometry": "assumed proportions, hdsim/data/units.toml"},
     )
