@@ -15,7 +15,7 @@ from hdsim.units import rad_to_arcmin
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("demo", help="lost-motion and stiffness tests on the default unit",
-                              description="Run the catalog ±4 %% T_N lost-motion test and the ±T_N "
+                              description="Run the catalog ±4 % T_N lost-motion test and the ±T_N "
                                           "stiffness test; write figures and HDF5 results to --out.")
     p.add_argument("--unit", default=None, help=f"built-in unit (default {default_unit()})")
     p.add_argument("--out", default="hdsim-demo", help="output folder (default ./hdsim-demo)")
