@@ -66,7 +66,7 @@ class ScenarioMetric:
     output: str
     scenario: str
     #: rows per task the study engine should send (larger chunks amortise overhead)
-    chunksize: int = 512
+    chunksize: int = 1024
 
     def __call__(self, X) -> np.ndarray:
         X = np.atleast_2d(np.asarray(X, dtype=float))

@@ -13,6 +13,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from threadpoolctl import threadpool_limits
 
+from hdsim.block_radau import BlockDiagonalRadau
 from hdsim.dynamics import ODESystem
 from hdsim.errors import SolverError
 
@@ -69,7 +70,9 @@ def integrate(system: ODESystem, t_span, t_eval=None, options: SolverOptions | N
     kwargs = dict(method=options.method, rtol=options.rtol, atol=atol, max_step=options.max_step)
     if M > 1 and options.method == "LSODA":
         kwargs.update(lband=n - 1, uband=n - 1)
-    elif M > 1 and options.method in ("Radau", "BDF"):
+    elif M > 1 and options.method == "Radau":
+        kwargs.update(method=BlockDiagonalRadau, block_size=n, jac=system.block_jacobian)
+    elif M > 1 and options.method == "BDF":
         kwargs.update(jac=system.block_jacobian)
     # BLAS threads buy nothing on these small vectors and, with several study processes on
     # a shared machine, spin-waiting OpenBLAS threads made steps 30x slower (measured).
