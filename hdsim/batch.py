@@ -30,9 +30,10 @@ METRIC_SCENARIOS = {
     "transmission_accuracy_arcsec": "kinematic_error", "lost_motion_on_reversal_arcsec": "kinematic_error",
 }
 
-#: metrics need only the turning points and branch samples; a coarse output grid is
-#: enough and the solver tolerance 1e-5 moves lost motion by < 1e-4 relative (benchmarks/)
-STUDY_SOLVER = SolverOptions(rtol=1e-5, atol_scale=1e-5)
+#: metrics need only the turning points and branch samples, so a coarse output grid is
+#: enough; rtol 1e-4 moves lost motion by < 1e-4 relative against rtol 1e-6
+#: (tests/test_batch.py) and saves a quarter of the steps of 1e-5
+STUDY_SOLVER = SolverOptions(rtol=1e-4, atol_scale=1e-4)
 STUDY_SAMPLES = {"lost_motion": 1, "stiffness": 40}
 
 
