@@ -276,20 +276,24 @@ class MaxwellSlip(NoFriction):
     slip_torque_max: float = param("largest element slip torque", "N·m", positive=True)
     velocity_scale: float = param("direction switch smoothing", "rad/s", 0.0, 1.0, positive=True)
 
-    def _elements(self):
+    def _elements(self, states):
+        """Element stiffnesses and slip torques shaped to broadcast against ``states``
+        (element axis first, sample axis last)."""
         n = self.n_elements
-        k = np.full((n,) + np.shape(self.k_total), 1.0) * (np.asarray(self.k_total) / n)
-        f = (np.arange(1, n + 1).reshape((n,) + (1,) * np.ndim(self.slip_torque_max)) / n) \
-            * np.asarray(self.slip_torque_max)
+        shape = (n,) + (1,) * (np.ndim(states) - 2) + (-1,)
+        k = (np.ones(n)[:, None] * np.atleast_1d(self.k_total) / n).reshape(shape)
+        f = (np.arange(1, n + 1)[:, None] / n * np.atleast_1d(self.slip_torque_max)).reshape(shape)
         return k, f
 
     def parallel_torque(self, states, twist_rate):
-        k, _ = self._elements()
-        return fr.maxwell_slip_torque(np.asarray(states), k)
+        states = np.asarray(states)
+        k, _ = self._elements(states)
+        return fr.maxwell_slip_torque(states, k)
 
     def parallel_rates(self, states, twist_rate):
-        k, f = self._elements()
-        return tuple(fr.maxwell_slip_rates(np.asarray(states), twist_rate, k, f, self.velocity_scale))
+        states = np.asarray(states)
+        k, f = self._elements(states)
+        return tuple(fr.maxwell_slip_rates(states, twist_rate, k, f, self.velocity_scale))
 
 
 # --------------------------------------------------------------------------- damping
