@@ -101,6 +101,45 @@ class ScenarioMetric:
             return np.concatenate([self._evaluate(X[:half]), self._evaluate(X[half:])])
 
 
+@dataclass(frozen=True)
+class ScenarioSeries:
+    """Picklable ``f(X) -> Y (rows, T)``: one signal of a scenario on its output grid.
+
+    For time-resolved indices (:func:`hdsim.sensitivity.resolved.resolved_indices`);
+    ``times()`` gives the grid [s].
+    """
+
+    unit: str
+    names: tuple[str, ...]
+    signal: str
+    scenario: str
+    samples_per_segment: int = 20
+    chunksize: int = 1024
+
+    def _scenario(self):
+        return load_scenario(builtin_scenario_path(self.scenario))
+
+    def times(self) -> np.ndarray:
+        return self._scenario().sample_times(self.samples_per_segment)
+
+    def __call__(self, X) -> np.ndarray:
+        X = np.atleast_2d(np.asarray(X, dtype=float))
+        metric = ScenarioMetric(self.unit, self.names, "", self.scenario)
+        Y = np.full((len(X), self.times().size), np.nan)
+        valid = np.array([metric._valid(row) for row in X], dtype=bool)
+        if valid.any():
+            run = run_scenario(metric._model(X[valid]), self._scenario(), options=STUDY_SOLVER,
+                               samples_per_segment=self.samples_per_segment)
+            Y[valid] = run.result.signals[self.signal]
+        return Y
+
+
+def series_function(unit: str, names, signal: str, scenario: str) -> ScenarioSeries:
+    """The resolved-study callable for ``signal`` (e.g. ``twist_rad``) of ``scenario``."""
+    builtin_scenario_path(scenario)
+    return ScenarioSeries(unit, tuple(resolve_names(unit, names)), signal, scenario)
+
+
 def model_function(unit: str, names, output: str, scenario: str | None = None) -> ScenarioMetric:
     """The study callable for ``output`` of ``scenario`` (default: the scenario producing it)."""
     if scenario is None:

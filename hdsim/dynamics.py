@@ -55,9 +55,8 @@ class ElasticPath:
         rates: tuple = ()
         if friction.kind == "series":
             tangent = model.hardening.tangent(engaged, self.c_struct, self.c_mesh) * contact
-            slip_rate = friction.series_rate(friction_states, twist_rate, tangent, spring_torque)
-            rates = (slip_rate,)
-            elastic_rate = twist_rate - slip_rate
+            rates = friction.series_rates(friction_states, twist_rate, tangent, spring_torque)
+            elastic_rate = twist_rate - sum(rates)
         damping_torque = model.damping.coefficient * elastic_rate * contact
         torque = model.backlash.contact_torque(spring_torque, damping_torque)
         if friction.kind == "parallel":

@@ -187,8 +187,8 @@ class NoFriction(Effect):
     #: torque across it. Their states are laid out after the mechanical states.
     kind: ClassVar[str] = "none"
 
-    def series_rate(self, states, twist_rate, tangent, elastic_torque):
-        return 0.0
+    def series_rates(self, states, twist_rate, tangent, elastic_torque):
+        return ()
 
     def series_twist(self, states):
         return 0.0
@@ -204,10 +204,9 @@ class NoFriction(Effect):
 class DahlSlip(NoFriction):
     """Micro-slip in the mesh: a Dahl-friction slider with end stops in series with the spring.
 
-    Sticks until the torque nears ``slip_torque``, then slides up to ``±slip_max``.
-    A ±T_N loop gains ``2·slip_max`` of width at zero torque (hysteresis loss); a
-    small cycle stays elastic until it exceeds the slip torque, so lost motion at
-    ±4 % T_N grows only by what slips (see docs/physics.md).
+    Sticks until the torque nears ``slip_torque``, then slides up to ``±slip_max``. A
+    cycle beyond the slip torque gains ``2·slip_max`` of width at zero torque
+    (hysteresis loss); a smaller one stays elastic (docs/physics.md).
     """
 
     id: ClassVar[str] = "dahl_slip"
@@ -215,19 +214,22 @@ class DahlSlip(NoFriction):
     state_names: ClassVar[tuple[str, ...]] = ("slip",)
     slip_torque: float = param("torque at which the slider slides", "N·m", positive=True)
     slip_max: float = param("slip range to each stop", "rad", 0.0, 0.05, positive=True)
-    #: stick and stop stiffness relative to the slip torque / slip range: stiff enough
-    #: that sticking adds < 1 % compliance to the drive, soft enough to stay well-conditioned
+    #: stick and stop stiffness relative to slip torque / slip range: stiff enough that
+    #: sticking adds < 1 % compliance, soft enough to stay well-conditioned
     stiffness_ratio: ClassVar[float] = 200.0
     #: direction switch smoothing [rad/s]: ~1e-3 of the twist rate of a catalog test
     velocity_scale: ClassVar[float] = 1e-6
 
     def series_twist(self, states):
-        return states[0]
+        return np.asarray(states)[0]
 
-    def series_rate(self, states, twist_rate, tangent, elastic_torque):
-        k = self.stiffness_ratio * self.slip_torque / self.slip_max
-        return fr.dahl_slip_rate(states[0], twist_rate, tangent, elastic_torque, self.slip_torque,
-                                 self.slip_max, k, k, 0.02 * self.slip_max, self.velocity_scale)
+    def series_rates(self, states, twist_rate, tangent, elastic_torque):
+        states = np.asarray(states)
+        torque = np.asarray(self.slip_torque)[None]
+        reach = np.asarray(self.slip_max)[None]
+        stiffness = self.stiffness_ratio * torque / reach
+        return tuple(fr.dahl_slip_rates(states, twist_rate, tangent, elastic_torque, torque, reach,
+                                        stiffness, 0.02 * reach, self.velocity_scale))
 
 
 @dataclass(frozen=True, eq=False)

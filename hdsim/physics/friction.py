@@ -25,28 +25,34 @@ def dahl_rate(state, velocity, stiffness, saturation):
     return stiffness * (1.0 - state / saturation * np.sign(velocity)) * velocity
 
 
-def dahl_slip_rate(slip, twist_rate, elastic_tangent, elastic_torque, slip_torque, slip_max,
-                   stick_stiffness, stop_stiffness, stop_width, velocity_scale):
-    """Slip rate [rad/s] of a Dahl-friction slider with end stops, in series with the spring.
+def dahl_slip_rates(slips, twist_rate, elastic_tangent, elastic_torque, slip_torques, slip_maxes,
+                    stiffnesses, stop_width, velocity_scale):
+    """Slip rates [rad/s] of Dahl-friction sliders with end stops, in series with the spring.
 
-    Micro-slip of the teeth: a slider that sticks (initial stiffness σ) until the
-    torque through it nears ``slip_torque``, then slides until it meets a stop at
-    ``±slip_max`` (stiffness ``k_stop``). Its friction torque is what the stops do
-    not carry, ``z = T − k_stop·dz(s)``, and obeys Dahl's law (Dahl, 1968) in the slip
-    ``s``: ``dz/ds = σ (1 − z/F sgn ṡ)`` (sgn smoothed as tanh over ``velocity_scale``
-    [rad/s], far below test twist rates), so the slider's tangent stiffness is
-    ``D = σ (1 − z/F sgn ṡ) + k_stop·contact(s)``. The spring (tangent ``K_t``) and the
-    slider share the twist rate: ``ṡ = K_t δ̇ / (K_t + D)`` — all of it goes into
-    the slider while it slides freely (D → 0), none in a backlash gap (K_t = 0).
+    Micro-slip of the teeth as ``n`` sliders in series (element axis first). Slider
+    ``i`` sticks (stiffness σ_i) until the torque through it nears ``F_i``, then slides
+    until it meets a stop at ``±s_max,i`` (stiffness k_i = σ_i). Its friction torque is
+    what its stops do not carry, ``z_i = T − k_i·dz(s_i)``, and obeys Dahl's law
+    (Dahl, 1968) in the slip: ``dz/ds = σ (1 − z/F sgn ṡ)`` (sgn smoothed as tanh over
+    ``velocity_scale`` [rad/s], far below test twist rates). Its tangent stiffness is
+    ``D_i = σ_i (1 − z_i/F_i sgn ṡ) + k_i·contact(s_i)``.
+
+    Spring (tangent ``K_t``) and sliders carry the same torque, so compliances add:
+    ``Ṫ = δ̇ / (1/K_t + Σ 1/D_j)`` and ``ṡ_i = Ṫ / D_i``. A freely sliding element
+    (D_i → 0) takes the whole twist rate; in a backlash gap (K_t = 0) nothing slips.
     """
     from hdsim.physics.backlash import smooth_contact, smooth_dead_zone
 
-    stop_torque = stop_stiffness * smooth_dead_zone(slip, slip_max, stop_width)
+    stop_torque = stiffnesses * smooth_dead_zone(slips, slip_maxes, stop_width)
     friction_torque = elastic_torque - stop_torque
     direction = np.tanh(twist_rate / velocity_scale)
-    stick = stick_stiffness * np.maximum(1.0 - friction_torque / slip_torque * direction, 0.0)
-    D = stick + stop_stiffness * smooth_contact(slip, slip_max, stop_width)
-    return elastic_tangent * twist_rate / (elastic_tangent + D + 1e-300)
+    stick = stiffnesses * np.maximum(1.0 - friction_torque / slip_torques * direction, 0.0)
+    D = stick + stiffnesses * smooth_contact(slips, slip_maxes, stop_width)
+    # compliances, floored so a free slider is very compliant rather than infinitely so
+    slider_compliance = 1.0 / np.maximum(D, 1e-9 * stiffnesses)
+    spring_compliance = 1.0 / np.maximum(elastic_tangent, 1e-300)
+    torque_rate = twist_rate / (spring_compliance + np.sum(slider_compliance, axis=0))
+    return torque_rate * slider_compliance
 
 
 def maxwell_slip_rates(deflections, velocity, stiffnesses, slip_torques, velocity_scale):
