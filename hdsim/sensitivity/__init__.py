@@ -14,11 +14,12 @@ from hdsim.sensitivity.design import DesignError, check_design, fingerprint
 from hdsim.sensitivity.evaluate import Evaluation, ModelError, evaluate, open_executor
 from hdsim.sensitivity.functions import FUNCTIONS, GFunction, Ishigami, Linear, get_function
 from hdsim.sensitivity.problem import Problem, build_problem, uniform
+from hdsim.sensitivity.resolved import resolved_indices
 from hdsim.sensitivity.study import StudyResult, run_study
 
 __all__ = [
     "analyse", "convergence", "estimates", "consistency_checks", "DesignError",
     "check_design", "fingerprint", "Evaluation", "ModelError", "evaluate", "open_executor",
     "FUNCTIONS", "GFunction", "Ishigami", "Linear", "get_function", "Problem",
-    "build_problem", "uniform", "StudyResult", "run_study",
+    "build_problem", "uniform", "StudyResult", "run_study", "resolved_indices",
 ]
