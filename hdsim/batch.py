@@ -105,7 +105,7 @@ class ScenarioMetric:
 class ScenarioSeries:
     """Picklable ``f(X) -> Y (rows, T)``: one signal of a scenario on its output grid.
 
-    For time-resolved indices (:func:`hdsim.sensitivity.resolved.resolved_indices`);
+    For time-resolved indices (`hdsim.sensitivity.resolved.resolved_indices`);
     ``times()`` gives the grid [s].
     """
 

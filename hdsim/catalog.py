@@ -29,14 +29,17 @@ def _data() -> dict:
 
 
 def unit_names() -> list[str]:
+    """Names of the built-in units, as the catalog names them."""
     return list(_data()["units"])
 
 
 def default_unit() -> str:
+    """The unit used when none is named (CSG-25-100)."""
     return _data()["default"]
 
 
 def catalog_entry(name: str) -> dict:
+    """Catalog data of a unit: size, ratio, rated torque [N·m], T1, T2 [N·m], K1–K3 [N·m/rad], status."""
     units = _data()["units"]
     if name not in units:
         raise unknown_name("unit", name, units)

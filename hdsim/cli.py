@@ -1,9 +1,9 @@
 """The ``hdsim`` console script.
 
-Each verb lives in its own module under :mod:`hdsim.commands` and exposes
+Each verb lives in its own module under `hdsim.commands` and exposes
 ``register(subparsers)``, which adds its parser and sets ``func``. This file only
-dispatches and turns :class:`~hdsim.errors.InputError` and
-:class:`~hdsim.errors.SolverError` into one line on stderr and exit status 2.
+dispatches and turns `hdsim.errors.InputError` and
+`hdsim.errors.SolverError` into one line on stderr and exit status 2.
 """
 
 from __future__ import annotations

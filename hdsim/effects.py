@@ -1,7 +1,7 @@
 """Effect slots: one family each (contracts.md §2), each with an explicit "no effect".
 
 Effects are frozen dataclasses that hold parameters only; the laws they use are
-the pure functions in :mod:`hdsim.physics`. A field may be a float or an array of
+the pure functions in `hdsim.physics`. A field may be a float or an array of
 equal length across the model (a batch of parameter sets evaluated at once).
 Effects with memory declare ``state_names``; their memory lives in the ODE state
 vector and is passed in and out, never stored on the object.

@@ -1,8 +1,8 @@
 """Exceptions that the command line turns into one line and exit status 2.
 
 Everything a user can get wrong (a file, a name, a number out of range) raises
-:class:`InputError`; a solver that gives up raises :class:`SolverError`. Both are
-reported without a traceback by :mod:`hdsim.cli`.
+`InputError`; a solver that gives up raises `SolverError`. Both are
+reported without a traceback by `hdsim.cli`.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ class SolverError(RuntimeError):
 
 
 def unknown_name(kind: str, name: str, known) -> InputError:
-    """An :class:`InputError` for an unknown ``name``, suggesting close matches."""
+    """An `InputError` for an unknown ``name``, suggesting close matches."""
     known = sorted(known)
     close = difflib.get_close_matches(name, known, n=3, cutoff=0.5)
     hint = f"; did you mean {', '.join(close)}?" if close else f"; known: {', '.join(known)}"

@@ -1,6 +1,6 @@
 """Friction on the wave-generator shaft while the drive runs (driven set-up only).
 
-The friction families of :mod:`hdsim.effects` act across the elastic path (the
+The friction families of `hdsim.effects` act across the elastic path (the
 flexspline and its mesh); this module is the *running* friction of the input: WG
 bearing, lip seals, churning of the grease and the sliding of the flexspline over the
 wave-generator bearing. It acts on the WG shaft, not in the elastic path, so it
@@ -22,9 +22,9 @@ measured strain-wave friction (reference §6, ``harivin/harmonic-drive-actuator`
 The law is memoryless (the Stribeck curve is a function of speed), so it adds no ODE
 state; ``ω_ε`` is the only regularisation.
 
-**Where the parameters live.** :class:`~hdsim.model.HarmonicDrive` has no slot for
-input friction, so it is *not* a model parameter: :func:`for_unit` builds an
-:class:`InputFriction` from the catalog numbers in ``hdsim/data/input_friction.toml``
+**Where the parameters live.** `hdsim.model.HarmonicDrive` has no slot for
+input friction, so it is *not* a model parameter: `for_unit` builds an
+`InputFriction` from the catalog numbers in ``hdsim/data/input_friction.toml``
 (starting torque and no-load running torque at 2000 rpm, reference table 2.4), and a
 driven scenario may override any field in its ``[input_friction]`` table
 (``model = "none"`` switches it off). Efficiency under load (the mesh losses that grow

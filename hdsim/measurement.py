@@ -21,7 +21,7 @@ they are converted to radians on reading. Files from another bench are read with
 column map (canonical name -> name in the file). The same data may come as HDF5: one
 1-D dataset per column at the file's root, the ``#`` keys as file attributes.
 
-Every problem is refused with one :class:`~hdsim.errors.InputError` line that names
+Every problem is refused with one `hdsim.errors.InputError` line that names
 the file, the line (CSV, 1-based, counting ``#`` lines and the header) or the row and
 column (HDF5), and what was expected. Reading never writes anything.
 
@@ -606,7 +606,7 @@ def make_measurement(
     meta: dict | None = None,
     source: str = "<arrays>",
 ) -> Measurement:
-    """Build a checked :class:`Measurement` from arrays in SI units.
+    """Build a checked `Measurement` from arrays in SI units.
 
     Parameters
     ----------
@@ -628,7 +628,7 @@ def make_measurement(
     Raises
     ------
     InputError
-        On the same problems :func:`load_measurement` refuses.
+        On the same problems `load_measurement` refuses.
     """
     text_meta = {str(k): str(v) for k, v in (meta or {}).items()}
     text_meta["test"] = str(test)

@@ -1,8 +1,8 @@
 """The harmonic drive model: geometry, calibration, inertias and five effect slots.
 
-A :class:`HarmonicDrive` holds parameters only. Every numeric parameter has a
+A `HarmonicDrive` holds parameters only. Every numeric parameter has a
 dotted name (``flexspline.h_c``, ``friction.k_h``, ``drive.J_out`` …) so studies,
-fits and the CLI's ``--set`` address them uniformly; :meth:`HarmonicDrive.with_updates`
+fits and the CLI's ``--set`` address them uniformly; `HarmonicDrive.with_updates`
 returns a new model and accepts arrays, giving a *batch* model that the solver
 integrates for all parameter sets at once.
 """
@@ -91,7 +91,7 @@ class ComplianceChain:
 
 
 def compliance_chain(g: FlexsplineGeometry, wg: WaveGenerator, kappa_mesh=1.0) -> ComplianceChain:
-    """The series chain of closed forms for geometry ``g`` (see :mod:`hdsim.physics.compliance`)."""
+    """The series chain of closed forms for geometry ``g`` (see `hdsim.physics.compliance`)."""
     G = g.G
     fillet_wall = 0.5 * (g.t_d + g.h_c)
     undercut_wall = g.h_pz - g.h_p
@@ -142,6 +142,7 @@ class HarmonicDrive:
 
     # ----------------------------------------------------------- compliance
     def compliance(self) -> ComplianceChain:
+        """The series chain of compliances [rad/(N·m)] of this geometry, calibrated."""
         return compliance_chain(self.geometry, self.wave_generator, self.calibration.kappa_mesh)
 
     def split(self):
@@ -156,18 +157,22 @@ class HarmonicDrive:
 
     # ----------------------------------------------------------- effects
     def effects(self) -> dict[str, fx.Effect]:
+        """The five slots, family name to effect."""
         return {slot: getattr(self, slot) for slot in SLOTS}
 
     def active_families(self) -> list[str]:
+        """Families whose slot holds an effect other than "none"."""
         return [slot for slot in SLOTS if getattr(self, slot).id != "none"]
 
     def with_effects(self, **slots) -> "HarmonicDrive":
+        """A new model with slots replaced, e.g. ``with_effects(backlash=DeadZoneBacklash(gap=1e-4))``."""
         for slot in slots:
             if slot not in SLOTS:
                 raise unknown_name("effect family", slot, SLOTS)
         return replace(self, **slots)
 
     def without(self, *families) -> "HarmonicDrive":
+        """A new model with the named families switched to their "no effect"."""
         return self.with_effects(**{f: fx.NO_EFFECT[f] for f in families})
 
     # ----------------------------------------------------------- parameters
@@ -186,6 +191,7 @@ class HarmonicDrive:
         return out
 
     def param_info(self, name: str) -> dict:
+        """Metadata of one dotted parameter: ``doc``, ``unit`` and, where known, ``bounds``."""
         prefix, _, attr = name.partition(".")
         part = self._parts().get(prefix)
         for f in fields(part) if part is not None else ():

@@ -1,6 +1,6 @@
 """Figures of a locked-wave-generator run (matplotlib, Agg-safe).
 
-Each function takes a :class:`hdsim.run.Run` (sample 0 of a batch) and an optional
+Each function takes a `hdsim.run.Run` (sample 0 of a batch) and an optional
 axes, and returns the figure, so notebooks and the CLI share one code path.
 Angles are shown in arcmin, torques in N·m.
 """

@@ -33,7 +33,7 @@ from hdsim.simulate import SimulationResult
 
 @dataclass
 class StoredRun:
-    """What :func:`read_result` returns: the result plus its metrics and provenance."""
+    """What `read_result` returns: the result plus its metrics and provenance."""
 
     result: SimulationResult
     metrics: dict[str, np.ndarray]
@@ -44,7 +44,7 @@ class StoredRun:
 
 
 def write_result(path, run) -> Path:
-    """Write a :class:`hdsim.run.Run` to ``path`` atomically; returns the path."""
+    """Write a `hdsim.run.Run` to ``path`` atomically; returns the path."""
     path = Path(path)
     result = run.result
     with atomic_path(path) as tmp:
@@ -70,7 +70,7 @@ def write_result(path, run) -> Path:
 
 
 def read_result(path) -> StoredRun:
-    """Read a file written by :func:`write_result`."""
+    """Read a file written by `write_result`."""
     path = Path(path)
     try:
         f = h5py.File(path, "r")

@@ -25,6 +25,7 @@ class Run:
     metrics: dict[str, np.ndarray]
 
     def metric(self, name: str, sample: int = 0) -> float:
+        """One metric of one sample of the batch, as a float (units in its name)."""
         return float(np.asarray(self.metrics[name]).reshape(-1)[sample])
 
 
@@ -41,6 +42,7 @@ def breakpoints(model: HarmonicDrive):
 
 
 def solver_options(scenario: Scenario, base: SolverOptions | None = None) -> SolverOptions:
+    """Solver options with the scenario's ``[solver]`` table applied."""
     options = base or SolverOptions()
     solver = scenario.data.get("solver", {})
     return options.replace(**solver) if solver else options

@@ -174,7 +174,7 @@ def _validate(table, schema, source, prefix):
 
 
 def load_scenario(path) -> Scenario:
-    """Read and validate a scenario TOML file; one-line :class:`InputError` on any problem."""
+    """Read and validate a scenario TOML file; one-line `InputError` on any problem."""
     path = Path(path)
     try:
         data = tomllib.loads(path.read_text())

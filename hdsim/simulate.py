@@ -1,8 +1,8 @@
-"""Integrate an :class:`~hdsim.dynamics.ODESystem` with ``solve_ivp``; raise on failure.
+"""Integrate an `hdsim.dynamics.ODESystem` with ``solve_ivp``; raise on failure.
 
-Returns a :class:`SimulationResult` with labelled arrays: states and output
+Returns a `SimulationResult` with labelled arrays: states and output
 signals of shape ``(M, nt)`` for a batch of ``M`` parameter sets (``(nt,)`` views
-via :meth:`SimulationResult.signal` for a single model).
+via `SimulationResult.signal` for a single model).
 """
 
 from __future__ import annotations
@@ -63,7 +63,7 @@ class SimulationResult:
 
 
 def integrate(system: ODESystem, t_span, t_eval=None, options: SolverOptions | None = None) -> SimulationResult:
-    """Run ``solve_ivp`` on ``system``; raise :class:`SolverError` unless it succeeds."""
+    """Run ``solve_ivp`` on ``system``; raise `SolverError` unless it succeeds."""
     options = options or SolverOptions()
     n, M = system.n_states, system.batch
     atol = np.tile(options.atol_scale * system.state_scales, M)

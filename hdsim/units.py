@@ -11,24 +11,30 @@ RAD_PER_S_PER_RPM = 2.0 * math.pi / 60.0
 
 
 def rad_to_arcmin(x):
+    """[rad] → [arcmin]"""
     return x * ARCMIN_PER_RAD
 
 
 def arcmin_to_rad(x):
+    """[arcmin] → [rad]"""
     return x / ARCMIN_PER_RAD
 
 
 def rad_to_arcsec(x):
+    """[rad] → [arcsec]"""
     return x * ARCSEC_PER_RAD
 
 
 def arcsec_to_rad(x):
+    """[arcsec] → [rad]"""
     return x / ARCSEC_PER_RAD
 
 
 def rpm_to_rad_per_s(x):
+    """[rpm] → [rad/s]"""
     return x * RAD_PER_S_PER_RPM
 
 
 def rad_per_s_to_rpm(x):
+    """[rad/s] → [rpm]"""
     return x / RAD_PER_S_PER_RPM

@@ -12,7 +12,7 @@ def dead_zone(twist, half_gap):
 
 
 def smooth_dead_zone(twist, half_gap, width):
-    """:func:`dead_zone` with its corners rounded over ``width`` [rad] (softplus).
+    """`dead_zone` with its corners rounded over ``width`` [rad] (softplus).
 
     The rounding is a stiffening contact over ``width``, the way real flanks come
     into contact; it keeps the Jacobian continuous so the implicit solver does not
@@ -49,7 +49,7 @@ def elasto_backlash_torque(spring_torque, damping_torque):
 def smooth_elasto_backlash_torque(spring_torque, damping_torque):
     """ElastoBacklash's contact rule made smooth: ``τ_c + |τ_c| tanh(τ_d / |τ_c|)``.
 
-    As in :func:`elasto_backlash_torque` the damping part stays within ``±|τ_c|``, so
+    As in `elasto_backlash_torque` the damping part stays within ``±|τ_c|``, so
     the contact never pulls and the torque vanishes with the spring torque at contact
     onset; the hard ``min``/``max`` clip becomes a tanh so the Jacobian stays
     continuous and an implicit solver does not chatter at contact.

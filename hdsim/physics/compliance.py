@@ -2,7 +2,7 @@
 
 Every function is pure and vectorised, returns a torsional compliance
 [rad/(N·m)], and takes SI inputs. The torque path from the output flange to the
-teeth is a series chain, so compliances add (:func:`flexspline_compliance_chain`).
+teeth is a series chain, so compliances add (`flexspline_compliance_chain`).
 
 References
 ----------
@@ -32,8 +32,14 @@ def thin_tube(length, mean_radius, wall, G):
 
     Parameters
     ----------
-    length : tube length [m]; mean_radius : mid-wall radius [m];
-    wall : wall thickness [m]; G : shear modulus [Pa].
+    length : float or array
+        Tube length [m].
+    mean_radius : float or array
+        Mid-wall radius [m].
+    wall : float or array
+        Wall thickness [m].
+    G : float
+        Shear modulus [Pa].
     """
     return length / (2.0 * np.pi * G * mean_radius**3 * wall)
 

@@ -25,7 +25,7 @@ def three_segment_twist(torque, T1, T2, K1, K2, K3):
 
 
 def three_segment_torque(twist, T1, T2, K1, K2, K3):
-    """Inverse of :func:`three_segment_twist`: torque [N·m] at twist [rad]."""
+    """Inverse of `three_segment_twist`: torque [N·m] at twist [rad]."""
     a = np.abs(twist)
     phi1 = T1 / K1
     phi2 = phi1 + (T2 - T1) / K2
@@ -48,7 +48,7 @@ def _sigmoid(x, width):
 def smooth_three_segment_torque(twist, T1, T2, K1, K2, K3, width):
     """Three-segment law with its two knees rounded over ``width`` [rad] (softplus).
 
-    Away from the knees it equals :func:`three_segment_torque` to within
+    Away from the knees it equals `three_segment_torque` to within
     ``(K_{i+1}−K_i)·width·e^{-|φ−φ_i|/width}``. The rounding keeps the right-hand side
     differentiable, which an implicit solver needs to take long steps.
     """
@@ -60,7 +60,7 @@ def smooth_three_segment_torque(twist, T1, T2, K1, K2, K3, width):
 
 
 def smooth_three_segment_tangent(twist, T1, T2, K1, K2, K3, width):
-    """Tangent stiffness [N·m/rad] of :func:`smooth_three_segment_torque`."""
+    """Tangent stiffness [N·m/rad] of `smooth_three_segment_torque`."""
     a = np.abs(twist)
     phi1 = T1 / K1
     phi2 = phi1 + (T2 - T1) / K2
@@ -85,7 +85,7 @@ def tanh_hardening_torque(twist, K0, K_inf, twist_scale):
 
 
 def tanh_hardening_tangent(twist, K0, K_inf, twist_scale):
-    """Tangent stiffness [N·m/rad] of :func:`tanh_hardening_torque`."""
+    """Tangent stiffness [N·m/rad] of `tanh_hardening_torque`."""
     return K_inf - (K_inf - K0) / np.cosh(twist / twist_scale) ** 2
 
 

@@ -1,10 +1,10 @@
 """Generic Sobol' sensitivity analysis for any picklable model ``f(X) -> y``.
 
-Modules: :mod:`.problem` (inputs), :mod:`.design` (sampling and structure checks),
-:mod:`.evaluate` (local/any-executor evaluation by row index), :mod:`.store`
-(resumable HDF5 studies), :mod:`.analysis` (indices, both interval kinds,
-convergence), :mod:`.checks` (consistency safeguards), :mod:`.functions`
-(closed forms with analytic indices), :mod:`.plots` (figures), :mod:`.study`
+Modules: `.problem` (inputs), `.design` (sampling and structure checks),
+`.evaluate` (local/any-executor evaluation by row index), `.store`
+(resumable HDF5 studies), `.analysis` (indices, both interval kinds,
+convergence), `.checks` (consistency safeguards), `.functions`
+(closed forms with analytic indices), `.plots` (figures), `.study`
 (the whole study).
 """
 

@@ -5,7 +5,7 @@ Two interval kinds are reported, both as half-widths at ``conf_level``:
 ``*_conf``
     SALib's row bootstrap on the pooled design: the arithmetic of
     ``SALib.analyze.sobol.analyze`` (its estimator functions, its resampling), run
-    in bounded-memory batches (:func:`salib_indices`). An iid bootstrap ignores the
+    in bounded-memory batches (`salib_indices`). An iid bootstrap ignores the
     variance reduction of scrambled Sobol' points and is typically 3–6× too wide;
     kept because it is what SALib users know and compare against.
 ``*_conf_replicates``
@@ -83,7 +83,7 @@ def analyse(problem, X, Y, *, second_order: bool, replicates: int, key=None, eva
 
 def check_outputs(problem, X, Y, second_order, key=None, evaluated=None) -> None:
     """The design check: block structure of ``X``, and (with ``key``) that every
-    evaluated output was computed from its own row. Raises :class:`DesignError`."""
+    evaluated output was computed from its own row. Raises `DesignError`."""
     check_design(X, problem.num_vars, second_order)
     if len(Y) != len(X):
         raise InputError(f"{len(Y)} outputs for {len(X)} design rows")
@@ -93,7 +93,7 @@ def check_outputs(problem, X, Y, second_order, key=None, evaluated=None) -> None
 
 def indices(problem, Y, ok, *, second_order: bool, replicates: int, conf_level=0.95,
             num_resamples=100, seed=0) -> dict:
-    """Indices from outputs already checked against their design (see :func:`analyse`).
+    """Indices from outputs already checked against their design (see `analyse`).
 
     ``ok`` marks good rows; a block with any bad row is dropped whole.
     """

@@ -1,7 +1,7 @@
 """The Saltelli/Sobol' design: sampling, replicate seeds and the structure check.
 
 Layout of one *block* (one base point of the Sobol' sequence), as
-:func:`SALib.sample.sobol.sample` writes it::
+`SALib.sample.sobol.sample` writes it::
 
     A, AB_1 … AB_D, [BA_1 … BA_D,] B        (D + 2 or 2D + 2 rows)
 
@@ -10,7 +10,7 @@ points with its own seed derived from the base seed. Rows are numbered
 replicate-major: row ``g`` is row ``g % M`` of replicate ``g // M``, where
 ``M = (N / R) * block_size``. The analyser never trusts row order alone: every block
 is checked here, and every output carries a fingerprint of the inputs it was
-computed from (:func:`fingerprint`).
+computed from (`fingerprint`).
 """
 
 from __future__ import annotations
@@ -109,7 +109,7 @@ def fingerprint(X: np.ndarray) -> np.ndarray:
 
 
 def check_design(X: np.ndarray, num_vars: int, second_order: bool) -> None:
-    """Raise :class:`DesignError` unless every block has the Saltelli structure.
+    """Raise `DesignError` unless every block has the Saltelli structure.
 
     AB_i must equal A in every column except i and equal B in column i; BA_i the
     reverse. Scaling is column-wise and deterministic, so exact equality holds.
@@ -139,7 +139,7 @@ def _compare(got, expect, k, offset, label):
 
 
 def check_keys(X: np.ndarray, keys: np.ndarray, done: np.ndarray) -> None:
-    """Raise :class:`DesignError` if an output was computed for other inputs than its row."""
+    """Raise `DesignError` if an output was computed for other inputs than its row."""
     done = np.asarray(done, dtype=bool)
     mismatch = done & (fingerprint(X) != np.asarray(keys, dtype=np.uint64))
     if mismatch.any():

@@ -26,7 +26,7 @@ class ModelError(RuntimeError):
 
 @dataclass
 class Evaluation:
-    """Outputs of :func:`evaluate`, aligned with the rows of ``X``."""
+    """Outputs of `evaluate`, aligned with the rows of ``X``."""
 
     y: np.ndarray                 # (n,) output, NaN where failed
     key: np.ndarray               # (n,) uint64 fingerprint of the inputs each output saw
@@ -135,7 +135,7 @@ def evaluate(func, X, executor=None, *, workers=2, chunksize=None, rows=None,
         ``Client.get_executor()``, MPIPoolExecutor). None: a local process pool of
         ``workers`` processes, or in-process serial evaluation when ``workers == 1``.
     chunksize : int, optional
-        Rows per task; default :func:`default_chunksize`.
+        Rows per task; default `default_chunksize`.
     rows : ndarray, optional
         Labels of the rows (e.g. global indices in a study) handed to ``on_chunk``.
     on_chunk : callable, optional

@@ -17,7 +17,7 @@ from hdsim.sensitivity.problem import build_problem
 def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, dists=None):
     """Study of simulator ``unit``: parameters by dotted name, ``output`` a metric.
 
-    Calls :func:`hdsim.batch.nominal_values` and :func:`hdsim.batch.model_function`
+    Calls `hdsim.batch.nominal_values` and `hdsim.batch.model_function`
     (imported lazily: the simulator is only needed for unit studies).
     """
     if not output:

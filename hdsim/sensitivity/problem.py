@@ -1,6 +1,6 @@
 """Study inputs: parameter names, bounds and distributions.
 
-A :class:`Problem` is the model-agnostic half of a Sobol study. It maps one-to-one
+A `Problem` is the model-agnostic half of a Sobol study. It maps one-to-one
 onto SALib's problem dictionary (``names``, ``bounds``, ``dists``) and can be
 built from nominal values with ``--range 10%`` or from explicit ``--bounds``.
 
@@ -139,7 +139,7 @@ def parse_bounds(text: str, name: str) -> tuple[float, float]:
 
 
 def build_problem(names, nominal=None, range_frac=None, bounds=None, dists=None) -> Problem:
-    """Build a :class:`Problem` from nominal values and command-line style options.
+    """Build a `Problem` from nominal values and command-line style options.
 
     Parameters
     ----------

@@ -3,7 +3,7 @@
 An HDF5 study file holds the definition (JSON attribute), the design ``X``
 ``(R * M, D)``, the outputs ``Y``, the input fingerprints ``key`` and a ``status``
 per row (0 pending, 1 done, 2 failed), rows numbered replicate-major
-(:mod:`hdsim.sensitivity.design`).
+(`hdsim.sensitivity.design`).
 
 Crash safety without SWMR: every dataset is contiguous and fully written when the
 file is created (built under a temporary name, then renamed), so evaluating only
@@ -31,7 +31,7 @@ INTERRUPTED = "failure message not saved (the run was interrupted)"
 
 
 class MemoryStore(Layout):
-    """A study kept in memory (no ``--out``); same interface as :class:`H5Store`."""
+    """A study kept in memory (no ``--out``); same interface as `H5Store`."""
 
     path = None
     dirty = False  # failure messages changed since the last save
@@ -107,7 +107,7 @@ class MemoryStore(Layout):
 
 
 class H5Store(MemoryStore):
-    """A study in an HDF5 file; open with :func:`open_store`."""
+    """A study in an HDF5 file; open with `open_store`."""
 
     def __init__(self, path: Path):
         import h5py
@@ -159,7 +159,7 @@ class RowReader:
 def open_store(definition: dict, n: int, path=None, resume=False):
     """Create, reopen or extend the study for ``definition`` with ``n`` base points.
 
-    Raises :class:`InputError` if ``path`` exists without ``resume``, or if it holds a
+    Raises `InputError` if ``path`` exists without ``resume``, or if it holds a
     study with a different definition.
     """
     if path is None:

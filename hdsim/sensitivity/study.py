@@ -1,6 +1,6 @@
 """Run a whole Sobol' study: design, evaluation into the store, analysis, checks.
 
-:func:`run_study` is what ``hdsim sobol`` calls; it is also the Python entry point
+`run_study` is what ``hdsim sobol`` calls; it is also the Python entry point
 for any picklable model ``f(X: (n, d)) -> (n,)``.
 """
 
@@ -24,7 +24,7 @@ MAX_LISTED_FAILURES = 20
 
 @dataclass
 class StudyResult:
-    """Everything a study produced; :meth:`to_json` gives the ``hdsim sobol`` object."""
+    """Everything a study produced; `to_json` gives the ``hdsim sobol`` object."""
 
     problem: object
     n: int
