@@ -1,0 +1,52 @@
+"""Benchmark: ``hdsim diagnose`` on a 20,000-row stiffness file with two rounds of refits.
+
+Run::
+
+    python benchmarks/bench_diagnose.py            # prints one JSON line, exit 1 if over budget
+
+The file comes from ``tests/truth.py`` (independent truth: hardening hidden, friction in
+the baseline, two loading rates, encoder noise and quantisation). ``hdsim diagnose`` runs
+as a user would run it (a subprocess of the console entry point) and must finish in under
+60 s on the project's 2-core machine; round 1 tries hardening, backlash and damping
+(each on all rows and on two hold-out folds, warm and fresh starts), round 2 the two left.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+BUDGET_S = 60.0
+
+
+def main(rows: int = 20000) -> int:
+    sys.path.insert(0, str(HERE.parent / "tests"))
+    import truth
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "bench_20k.csv"
+        cols, tr = truth.make_stiffness_data({"hardening"}, {"friction"}, seed=1, n_rows=rows)
+        truth.write_csv(path, cols, tr["meta"])
+        t0 = time.perf_counter()
+        out = subprocess.run([sys.executable, "-m", "hdsim.cli", "diagnose", str(path),
+                              "--effects", "friction", "--json"], capture_output=True, text=True)
+        seconds = time.perf_counter() - t0
+    if out.returncode != 0:
+        print(out.stderr, file=sys.stderr)
+        return 1
+    j = json.loads(out.stdout)
+    rounds = sum(1 for r in j["rounds"] if r["candidates"])
+    record = {"rows": rows, "seconds": round(seconds, 2), "budget_s": BUDGET_S,
+              "rounds_of_refits": rounds, "passes": j["passes"], "added": j["added"],
+              "baseline_rmse_rad": j["baseline"]["rmse_rad"], "final_rmse_rad": j["final"]["rmse_rad"]}
+    print(json.dumps(record))
+    return 0 if seconds < BUDGET_S and rounds >= 2 else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main(int(sys.argv[1]) if len(sys.argv) > 1 else 20000))

@@ -1,0 +1,178 @@
+"""Where the model fails: residual views, whiteness, and plain sentences that point at it.
+
+Residual ``r = measured − model`` (angle, [rad]) after a fit. The views of
+``reference/sensitivity-and-diagnosis.md`` §7:
+
+============================================ ==========================================
+view                                         signature → candidate
+============================================ ==========================================
+r vs torque, coloured by loading direction   loop → friction/damping; step at T = 0 →
+                                             backlash; slope changing with |T| → hardening
+r vs time                                    drift, creep, a bad segment
+r vs wave-generator angle, order spectrum    1×, 2×, 4× WG, 1× output → kinematic error
+r vs loading rate                            loop width growing with rate → damping
+============================================ ==========================================
+
+Whiteness: the Ljung–Box statistic ``Q = N(N+2) Σ_{k≤h} ρ_k²/(N−k)`` (χ² with ``h``
+degrees of freedom for a white residual) and the noise floor ``σ_n = std(Δr)/√2`` (the
+first difference removes a slowly varying structure but keeps white noise). A residual
+counts as *explained* when it is white or when its rms is within 25 % of the noise floor
+(the structure left is below ~75 % of the noise rms); otherwise the model still misses
+something, whatever was added.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy import stats
+
+from hdsim.units import ARCMIN_PER_RAD, ARCSEC_PER_RAD
+
+__all__ = ["ljung_box", "noise_floor", "whiteness", "views", "findings", "order_spectrum",
+           "EXPLAINED_RATIO"]
+
+#: rms / noise-floor below which the residual counts as explained
+EXPLAINED_RATIO = 1.25
+
+
+def ljung_box(r, lags: int = 20) -> tuple[float, float]:
+    """(Q, p-value) of the Ljung–Box test on ``r`` over ``lags`` lags."""
+    r = np.asarray(r, dtype=float)
+    r = r - r.mean()
+    n = r.size
+    den = float(r @ r)
+    if den <= 0 or n <= lags + 1:
+        return 0.0, 1.0
+    acf = np.array([float(r[k:] @ r[:-k]) / den for k in range(1, lags + 1)])
+    q = n * (n + 2) * float(np.sum(acf**2 / (n - np.arange(1, lags + 1))))
+    return q, float(stats.chi2.sf(q, lags))
+
+
+def noise_floor(r) -> float:
+    """Rms of the white part of ``r``: ``std(diff(r))/√2`` [same unit as r]."""
+    r = np.asarray(r, dtype=float)
+    return float(np.std(np.diff(r)) / math.sqrt(2.0)) if r.size > 2 else 0.0
+
+
+def whiteness(r, lags: int = 20) -> dict:
+    """Ljung–Box, noise floor and the verdict for a residual [rad]."""
+    r = np.asarray(r, dtype=float)
+    q, p = ljung_box(r, lags)
+    floor = noise_floor(r)
+    rms = float(np.sqrt(np.mean((r - r.mean()) ** 2)))
+    ratio = rms / floor if floor > 0 else math.inf
+    structured = max(0.0, 1.0 - (floor / rms) ** 2) if rms > 0 else 0.0
+    white = p > 0.01
+    return {"ljung_box_q": q, "lags": lags, "p_value": p, "white": bool(white),
+            "noise_floor_rad": floor, "rmse_rad": rms, "rms_over_noise": ratio,
+            "structured_fraction": structured,
+            "explained": bool(white or ratio <= EXPLAINED_RATIO)}
+
+
+def order_spectrum(angle, r, max_order: float = 8.0, n_orders: int = 800):
+    """Amplitude [rad] of ``r`` at orders of ``angle`` (least-squares sine fit per order).
+
+    Works for any sampling of the angle (uneven, reversing): the amplitude at order ``k``
+    is that of the best fit ``a sin(kθ) + b cos(kθ)``.
+    """
+    angle = np.asarray(angle, dtype=float)
+    r = np.asarray(r, dtype=float) - np.mean(r)
+    orders = np.linspace(max_order / n_orders, max_order, n_orders)
+    amp = np.empty_like(orders)
+    for i, k in enumerate(orders):
+        s, c = np.sin(k * angle), np.cos(k * angle)
+        A = np.column_stack([s, c])
+        coef = np.linalg.lstsq(A, r, rcond=None)[0]
+        amp[i] = math.hypot(*coef)
+    return orders, amp
+
+
+def _direction(time, torque):
+    t = np.asarray(time, dtype=float)
+    T = np.asarray(torque, dtype=float)
+    k = max(int(T.size // 400), 1)
+    smooth = np.convolve(T, np.ones(2 * k + 1) / (2 * k + 1), mode="same")
+    return np.sign(np.gradient(smooth, t)), np.abs(np.gradient(smooth, t))
+
+
+def views(meas, residual) -> dict:
+    """The arrays behind the figures: residual vs torque/direction, time, rate, WG angle."""
+    direction, rate = _direction(meas.time, meas.torque)
+    out = {"time": np.asarray(meas.time), "torque": np.asarray(meas.torque),
+           "residual": np.asarray(residual), "direction": direction, "rate": rate}
+    if meas.test == "kinematic_error":
+        out["wg_angle"] = np.asarray(meas.wg_angle)
+    return out
+
+
+def _band_mean(mask, r):
+    return float(np.mean(r[mask])) if np.count_nonzero(mask) >= 3 else float("nan")
+
+
+def findings(meas, residual, max_items: int = 5) -> list[str]:
+    """Plain sentences that say where the model misses, largest first."""
+    r = np.asarray(residual, dtype=float)
+    T = np.asarray(meas.torque, dtype=float)
+    direction, rate = _direction(meas.time, meas.torque)
+    Tmax = max(float(np.max(np.abs(T))), 1e-12)
+    rms = float(np.sqrt(np.mean(r * r)))
+    out: list[tuple[float, str]] = []
+    floor = noise_floor(r)
+
+    def arcmin(x):
+        return f"{abs(x) * ARCMIN_PER_RAD:.2f} arcmin"
+
+    def arcsec(x):
+        return f"{abs(x) * ARCSEC_PER_RAD:.1f} arcsec"
+
+    # zero crossing: step of the residual between just below and just above zero torque
+    near = np.abs(T) < 0.08 * Tmax
+    step = _band_mean(near & (T > 0), r) - _band_mean(near & (T < 0), r)
+    if np.isfinite(step):
+        out.append((abs(step), f"the model misses {arcsec(step)} ({arcmin(step)}) where the torque "
+                               f"crosses zero: a step in the residual there points at backlash"))
+    # branches
+    up = _band_mean((direction > 0) & (np.abs(T) < 0.5 * Tmax), r)
+    down = _band_mean((direction < 0) & (np.abs(T) < 0.5 * Tmax), r)
+    if np.isfinite(up) and np.isfinite(down):
+        gap = down - up
+        out.append((abs(gap), f"loading and unloading branches of the residual differ by "
+                              f"{arcsec(gap)}: a hysteresis loop the model does not have "
+                              f"(friction, or damping if it grows with the loading rate)"))
+    # rate dependence of the loop
+    if np.count_nonzero(rate > 0) > 10:
+        fast = rate > np.median(rate[rate > 0]) * 1.5
+        slow = rate < np.median(rate[rate > 0]) / 1.5
+        if np.count_nonzero(fast) > 10 and np.count_nonzero(slow) > 10:
+            w_fast = _band_mean(fast & (direction < 0), r) - _band_mean(fast & (direction > 0), r)
+            w_slow = _band_mean(slow & (direction < 0), r) - _band_mean(slow & (direction > 0), r)
+            if np.isfinite(w_fast) and np.isfinite(w_slow):
+                diff = w_fast - w_slow
+                out.append((abs(diff), f"the residual loop is {arcsec(diff)} "
+                                       f"{'wider' if diff > 0 else 'narrower'} at the fast loading "
+                                       f"rate than at the slow one: rate-dependent loss (damping)"))
+    # curvature with |T|
+    hi = np.abs(T) > 0.7 * Tmax
+    mid = (np.abs(T) > 0.3 * Tmax) & (np.abs(T) < 0.6 * Tmax)
+    curve = _band_mean(hi, r * np.sign(T)) - _band_mean(mid, r * np.sign(T))
+    if np.isfinite(curve):
+        out.append((abs(curve), f"towards rated torque the residual bends by {arcsec(curve)} "
+                                f"({'the drive is stiffer' if curve < 0 else 'the drive is softer'} "
+                                f"than the model at high load): stiffness changing with load "
+                                f"(hardening)"))
+    if meas.test == "kinematic_error":
+        ratio = float(meas.ratio)
+        wg = np.asarray(meas.wg_angle, dtype=float)
+        for k, label in ((1, "1× wave generator"), (2, "2× wave generator"),
+                         (4, "4× wave generator"), (1.0 / ratio, "1× output")):
+            A = np.column_stack([np.sin(k * wg), np.cos(k * wg)])
+            amp = float(np.hypot(*np.linalg.lstsq(A, r - r.mean(), rcond=None)[0]))
+            out.append((amp, f"the residual has {arcsec(amp)} at {label} order: periodic in the "
+                             f"wave-generator angle (kinematic error)"))
+    out.sort(key=lambda item: -item[0])
+    sentences = [f"residual rms {arcsec(rms)} against a noise floor of {arcsec(floor)}"]
+    threshold = max(2.0 * floor, 0.1 * rms)
+    sentences += [text[0].upper() + text[1:] for size, text in out[:max_items] if size > threshold]
+    return sentences
