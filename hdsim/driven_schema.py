@@ -1,8 +1,8 @@
-"""Scenario tables of the ``driven_wave_generator`` set-up (registered in :mod:`hdsim.scenario`).
+"""Scenario tables of the ``driven_wave_generator`` set-up (registered in `hdsim.scenario`).
 
-Kept apart from :mod:`hdsim.driven` so that the scenario module can import the
+Kept apart from `hdsim.driven` so that the scenario module can import the
 schema without importing the simulator. Values are checked for type by
-:mod:`hdsim.scenario`; their meaning and ranges by :func:`hdsim.driven.bench_from_scenario`.
+`hdsim.scenario`; their meaning and ranges by `hdsim.driven.bench_from_scenario`.
 Switches are strings (the scenario schema has no booleans). See
 ``docs/tutorial-kinematic-error.md`` for every key.
 """
@@ -45,6 +45,8 @@ DRIVEN_SCHEMA = {
         "kp": float,                 # N m s/rad on WG speed error (overrides the tuning)
         "ki": float,                 # N m/rad on the integral of the WG speed error
         "feedforward": str,          # "yes" | "no": acceleration feedforward J_total * alpha_ref
+        "position_loop": str,        # "yes" | "no": outer position loop (gain = crossover / 6)
+        "position_gain_per_s": float,  # outer position-loop gain (overrides the tuning)
     },
     "input_friction": {
         "model": str,                # catalog | none
@@ -59,8 +61,7 @@ DRIVEN_SCHEMA = {
     },
     "linearise": {
         "load": float,               # operating-point load, fraction of T_N
-        "f_min_Hz": float,
-        "f_max_Hz": float,
+        "f_min_Hz": float,           # frequency-response check from here (default 1.5 x the sweep start)
         "compare_below": float,      # frequency-response check up to this fraction of the first resonance
     },
     "analysis": {

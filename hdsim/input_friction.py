@@ -76,6 +76,7 @@ class InputFriction:
                              "(the friction level must stay positive)")
 
     def modulation(self, angle):
+        """Position factor ``m(θ) = 1 + Σ r_k cos(kθ + φ_k)`` of the Coulomb/Stribeck level."""
         m = 1.0
         for k, r, p in zip(self.ripple_orders, self.ripple_amplitudes, self.ripple_phases):
             m = m + r * np.cos(k * angle + p)
@@ -93,6 +94,7 @@ class InputFriction:
                         self.viscous, self.velocity_scale)
 
     def with_updates(self, **changes) -> "InputFriction":
+        """A copy with fields changed (names checked)."""
         known = {f.name for f in fields(self)}
         for name in changes:
             if name not in known:

@@ -42,6 +42,7 @@ def order_label(order: float) -> str:
 
 
 def window_mean(t, x, window):
+    """Mean of ``x`` (M, nt) over the time ``window`` (start, end), per sample."""
     m = _mask(t, window)
     return np.mean(np.asarray(x)[:, m], axis=1)
 
@@ -149,9 +150,10 @@ def _fft_window(t, window):
 
 
 def sweep_input_spectrum(t, u, window):
+    """Spectrum of the load deviation on the same (zero-padded) bins as `sweep_frequency_response`."""
     m, dt = _fft_window(t, window)
     x = np.asarray(u)[m]
-    return np.fft.rfft(x - x[0])
+    return np.fft.rfft(x - x[0], 2 * x.size)
 
 
 def sweep_frequency_response(t, u, y, window):
@@ -174,7 +176,8 @@ def sweep_frequency_response(t, u, y, window):
 
 def settling(t, err, window, band):
     """(time after the window start until ``err`` stays within ``band`` of its final value [s],
-    peak-to-peak of ``err`` over the last half of the window [rad])."""
+    peak-to-peak of ``err`` over the last half of the window [rad]: residual vibration plus
+    whatever the position loop is still pulling in)."""
     err = np.asarray(err)
     m = _mask(t, window)
     tt = t[m]

@@ -1,0 +1,210 @@
+"""Driven wave generator: scenarios, input checks, measured profiles, batches, metrics, CLI.
+
+The physics checks (rigid limit, energy, order spectrum, Bode, friction, the contract
+scenario) are in ``test_driven_physics.py``.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hdsim import ke_metrics
+from hdsim.catalog import load_unit
+from hdsim.driven import SETUP, bench_from_scenario, read_profile_csv
+from hdsim.errors import InputError
+from hdsim.run import run_scenario
+from hdsim.scenario import Scenario, load_scenario
+from hdsim.units import arcsec_to_rad, rad_to_arcsec
+
+ROOT = Path(__file__).resolve().parents[1]
+DRIVEN = ["kinematic_error", "constant_speed", "reversal", "point_to_point", "sine_oscillation", "load_step",
+          "frequency_sweep"]
+
+
+def scenario(**tables) -> Scenario:
+    data = {"name": "t", "setup": SETUP, "metrics": tables.pop("metrics", [])}
+    data.update(tables)
+    return Scenario(data, "<dict>")
+
+
+# --------------------------------------------------------------------------- shipped scenarios
+@pytest.mark.parametrize("name", DRIVEN)
+def test_shipped_scenario_is_a_symlink_and_builds(name):
+    link = ROOT / "scenarios" / f"{name}.toml"
+    assert link.is_symlink() and link.resolve() == (ROOT / "hdsim/data/scenarios" / f"{name}.toml").resolve()
+    sc = load_scenario(link)
+    assert sc.setup == SETUP and sc.name == name
+    bench = bench_from_scenario(load_unit(), sc)
+    assert bench.t_end > 0 and bench.sample_times()[-1] == pytest.approx(bench.t_end)
+
+
+def test_kinematic_error_scenario_reports_the_contract_metrics():
+    sc = load_scenario(ROOT / "scenarios/kinematic_error.toml")
+    assert {"transmission_accuracy", "lost_motion_on_reversal"} <= set(sc.metrics)
+
+
+@pytest.mark.parametrize("tables, message", [
+    ({"input": {"mode": "servo", "profile": "hold"}}, "input.mode"),
+    ({"input": {"mode": "prescribed", "profile": "zigzag"}}, "input.profile"),
+    ({"input": {"mode": "prescribed", "profile": "constant"}}, "speed_rpm"),
+    ({"input": {"mode": "prescribed", "profile": "hold"}, "load": {"profile": "opposing", "torque": 0.1}},
+     "moving input"),
+    ({"input": {"mode": "prescribed", "profile": "hold"}, "load": {"profile": "constant", "torque": 9.0}},
+     "within ±5"),
+    ({"input": {"mode": "prescribed", "profile": "csv"}}, "input.csv"),
+    ({"input": {"mode": "prescribed", "profile": "hold"}, "controller": {"bandwidth_Hz": 10.0}}, "pi"),
+    ({"input": {"mode": "pi", "profile": "hold"}, "controller": {"feedforward": "maybe"}}, "yes"),
+    ({"input": {"mode": "prescribed", "profile": "hold"}, "metrics": ["wobble"]}, "metric"),
+    ({"input": {"mode": "prescribed", "profile": "hold"}, "input_friction": {"model": "magic"}}, "catalog"),
+    ({"input": {"mode": "prescribed", "profile": "sine", "frequency_Hz": -1.0}}, "frequency_Hz"),
+])
+def test_bad_scenarios_are_refused_in_one_line(tables, message):
+    with pytest.raises(InputError) as info:
+        bench_from_scenario(load_unit(), scenario(**tables))
+    text = str(info.value)
+    assert message in text and "\n" not in text
+
+
+def test_schema_rejects_unknown_keys_and_wrong_types():
+    with pytest.raises(InputError, match="unknown key"):
+        scenario(input={"mode": "prescribed", "profile": "hold", "sped_rpm": 3.0})
+    with pytest.raises(InputError, match="must be float"):
+        scenario(input={"mode": "prescribed", "profile": "constant", "speed_rpm": "fast"})
+    with pytest.raises(InputError, match="missing input.profile"):
+        scenario(input={"mode": "prescribed"})
+
+
+def test_set_overrides_reach_the_bench():
+    sc = load_scenario(ROOT / "scenarios/constant_speed.toml").with_updates({"input.speed_rpm": "1000"})
+    bench = bench_from_scenario(load_unit(), sc)
+    assert bench.motion.max_speed == pytest.approx(1000 * 2 * np.pi / 60)
+
+
+# --------------------------------------------------------------------------- measured profile
+def test_measured_profile_from_a_contract_kinematic_error_file():
+    path = ROOT / "tests/data/ke_example.csv"
+    profile = read_profile_csv(path)
+    assert {"time", "angle", "torque"} <= set(profile)
+    sc = Scenario({"name": "measured", "setup": SETUP, "metrics": ["tracking"],
+                   "input": {"mode": "prescribed", "profile": "csv", "csv": str(path)},
+                   "load": {"profile": "csv"}, "solver": {"rtol": 1e-5, "atol_scale": 1e-3}}, "<dict>")
+    run = run_scenario(load_unit(), sc)
+    s, t = run.result.signals, run.result.t
+    # the WG follows the file (zeroed at its first sample), the load is the file's torque
+    t_file, angle_file = profile["time"] - profile["time"][0], profile["angle"] - profile["angle"][0]
+    bench = bench_from_scenario(load_unit(), sc)
+    assert np.max(np.abs(bench.motion.angle(t_file) - angle_file)) < 1e-12  # the spline interpolates
+    assert np.max(np.abs(s["wg_angle_rad"][0] - np.interp(t, t_file, angle_file))) < 1e-4  # ~ 1/N of a step
+    torque = np.interp(t, profile["time"] - profile["time"][0], profile["torque"])
+    assert np.max(np.abs(s["load_torque_Nm"][0] - torque)) < 0.1
+    # loaded against the motion: the output lags by roughly T/K1
+    lag = np.median(s["twist_rad"][0])
+    assert lag == pytest.approx(np.median(torque) / 3.1e4, rel=0.3)
+
+
+def test_measured_profile_relative_path_and_speed_column(tmp_path):
+    t = np.linspace(0.0, 0.5, 60)
+    rows = "\n".join(f"{a},{b}" for a, b in zip(t, 300.0 * np.sin(np.pi * t / 0.5) ** 2))
+    (tmp_path / "motor.csv").write_text("# from the motor drive\ntime_s,wg_speed_rpm\n" + rows + "\n")
+    (tmp_path / "sc.toml").write_text(
+        f'name = "m"\nsetup = "{SETUP}"\n[input]\nmode = "prescribed"\nprofile = "csv"\ncsv = "motor.csv"\n')
+    bench = bench_from_scenario(load_unit(), load_scenario(tmp_path / "sc.toml"))
+    # angle = integral of the speed: 300 rpm * 0.25 s = 1.25 turns
+    assert bench.motion.angle(0.5) == pytest.approx(2 * np.pi * 300 / 60 * 0.25, rel=1e-3)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("time_s,wg_angle_rad\n0,0\n1,1\n", "at least 4 rows"),
+    ("time,wg_angle_rad\n" + "".join(f"{i},{i}\n" for i in range(5)), "missing column time_s"),
+    ("time_s,angle\n" + "".join(f"{i},{i}\n" for i in range(5)), "wg_angle_rad"),
+    ("time_s,wg_angle_rad\n0,0\n1,1\n1,2\n3,3\n4,4\n", "strictly increasing"),
+    ("time_s,wg_angle_rad\n0,0\n1,x\n2,2\n3,3\n4,4\n", "not a number"),
+])
+def test_bad_profile_files_are_refused(tmp_path, text, message):
+    path = tmp_path / "p.csv"
+    path.write_text(text)
+    with pytest.raises(InputError, match=message):
+        read_profile_csv(path)
+
+
+# --------------------------------------------------------------------------- batch
+def test_batch_metrics_have_one_value_per_sample_and_match_single_runs():
+    unit = load_unit()
+    a2 = float(unit.kinematic_error.a2)
+    sc = load_scenario(ROOT / "scenarios/constant_speed.toml").with_updates(
+        {"input.speed_rpm": 300.0, "input.output_revolutions": 0.02, "input.settle_revolutions": 0.0,
+         "input.ramp_s": 0.05, "input_friction.model": "none"})
+    sc = Scenario({**sc.data, "metrics": ["transmission_accuracy", "order_spectrum"]}, sc.source)
+    batch = run_scenario(unit.with_updates({"kinematic_error.a2": np.array([a2, 2 * a2])}), sc)
+    single = run_scenario(unit.with_updates({"kinematic_error.a2": 2 * a2}), sc)
+    for name, value in batch.metrics.items():
+        assert np.shape(value) == (2,), name
+        assert value[1] == pytest.approx(single.metrics[name][0], rel=1e-3, abs=1e-3), name
+    assert batch.metrics["ke_order_2_arcsec"][1] / batch.metrics["ke_order_2_arcsec"][0] == pytest.approx(2, rel=0.02)
+
+
+# --------------------------------------------------------------------------- metric functions
+def test_metric_functions_on_synthetic_signals():
+    N = 50
+    wg = np.linspace(0.0, 2 * 2 * np.pi * N, 40001)  # two output revolutions of WG travel
+    t = wg / 100.0
+    a = arcsec_to_rad(np.array([3.0, 7.0, 1.0, 11.0]))
+    q = (a[0] * np.sin(wg) + a[1] * np.sin(2 * wg + 0.3) + a[2] * np.cos(4 * wg)
+         + a[3] * np.sin(wg / N + 1.0) + 1e-4)[None, :]
+    window = (t[0], t[-1])
+    amps = ke_metrics.order_amplitudes(t, wg, q, window, N, [1, 2, 4, 1 / N])
+    assert rad_to_arcsec(np.array(amps)).ravel() == pytest.approx([3.0, 7.0, 1.0, 11.0], rel=1e-3)
+    ta = ke_metrics.transmission_accuracy(t, wg, q, window, N)[0]
+    assert ta == pytest.approx(np.max(q[0, t >= t[-1] / 2]) - np.min(q[0, t >= t[-1] / 2]), rel=1e-12)
+    # a reverse pass over the same WG angles, offset by 20 arcsec: lost motion = 20 arcsec
+    half = wg.size // 2
+    fwd, rev = (t[0], t[half]), (t[half + 1], t[-1])
+    wg2 = np.concatenate([wg[: half + 1], wg[half:0:-1]])
+    q2 = np.concatenate([q[0, : half + 1], q[0, half:0:-1] + arcsec_to_rad(20.0)])[None, :]
+    t2 = np.linspace(t[0], t[-1], wg2.size)
+    fwd, rev = (t2[0], t2[half]), (t2[half + 1], t2[-1])
+    lm = ke_metrics.lost_motion_on_reversal(t2, wg2, q2, fwd, rev)[0]
+    assert rad_to_arcsec(lm) == pytest.approx(20.0, rel=1e-3)
+    orders, spectrum = ke_metrics.order_spectrum(t, wg, q, window, N, max_order=5)
+    assert rad_to_arcsec(spectrum[np.argmin(np.abs(orders - 2))]) == pytest.approx(7.0, rel=1e-3)
+
+
+def test_driven_figures(tmp_path):
+    from hdsim.driven_plots import plot_deviation, plot_driven_time
+
+    sc = load_scenario(ROOT / "scenarios/kinematic_error.toml").with_updates(
+        {"input.output_revolutions": 0.02, "input.settle_revolutions": 0.0})
+    run = run_scenario(load_unit(), sc)
+    for fig, name in ((plot_deviation(run), "dev.png"), (plot_driven_time(run), "time.png")):
+        fig.savefig(tmp_path / name)
+        assert (tmp_path / name).stat().st_size > 10_000
+
+
+# --------------------------------------------------------------------------- command line
+def test_cli_simulate_driven_json(tmp_path):
+    p = subprocess.run(
+        [sys.executable, "-m", "hdsim", "simulate", str(ROOT / "scenarios/kinematic_error.toml"),
+         "--unit", "CSG-25-100", "--set", "scenario.input.output_revolutions=0.02",
+         "--set", "scenario.input.settle_revolutions=0.01", "--out", str(tmp_path), "--json"],
+        capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    payload = json.loads(p.stdout)
+    assert payload["scenario"] == "kinematic_error" and payload["unit"] == "CSG-25-100"
+    metrics = payload["metrics"]
+    assert metrics["transmission_accuracy_arcsec"] > 0 and metrics["lost_motion_on_reversal_arcsec"] > 0
+    assert Path(payload["result"]).is_file()
+
+
+def test_cli_bad_driven_scenario_exits_2(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(f'name = "b"\nsetup = "{SETUP}"\n[input]\nmode = "prescribed"\nprofile = "warp"\n')
+    p = subprocess.run([sys.executable, "-m", "hdsim", "simulate", str(bad), "--out", str(tmp_path), "--json"],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2 and "Traceback" not in p.stderr and "input.profile" in p.stderr
+    assert p.stdout == ""
