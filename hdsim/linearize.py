@@ -48,8 +48,10 @@ def linearize(build: Callable[[float], ODESystem], x_op, u_op: float, outputs=No
     C = np.zeros((len(outputs), len(names)))
     for row, name in enumerate(outputs):
         C[row, names.index(name)] = 1.0
-    return control.ss(A, B, C, np.zeros((len(outputs), 1)), states=names, inputs=[input_name],
-                      outputs=outputs)
+    # python-control refuses '.' in signal names (it reserves it for subsystem paths)
+    safe = lambda label: label.replace(".", "_")  # noqa: E731
+    return control.ss(A, B, C, np.zeros((len(outputs), 1)), states=[safe(n) for n in names],
+                      inputs=[input_name], outputs=[safe(o) for o in outputs])
 
 
 def natural_frequencies(sys: control.StateSpace):

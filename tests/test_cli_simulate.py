@@ -108,3 +108,15 @@ def test_demo_writes_figures_and_results(tmp_path):
 def test_no_verb_prints_help_and_exits_2():
     p = hdsim()
     assert p.returncode == 2 and "usage" in p.stderr
+
+
+def test_simulate_kinematic_error_contract(tmp_path):
+    out = tmp_path / "ke"
+    p = hdsim("simulate", str(ROOT / "scenarios/kinematic_error.toml"), "--unit", "CSG-25-100",
+              "--out", str(out), "--json")
+    assert p.returncode == 0, p.stderr
+    metrics = json.loads(p.stdout)["metrics"]
+    # catalog class for size 25, standard grade, ratio >= 50: 1 arcmin = 60 arcsec
+    assert 0 < metrics["transmission_accuracy_arcsec"] < 60
+    assert metrics["lost_motion_on_reversal_arcsec"] > 0
+    assert (out / "kinematic_error_deviation.png").stat().st_size > 10_000

@@ -92,4 +92,12 @@ def write_outputs(run, out_dir: Path, figures: bool = True) -> dict[str, str]:
         series = out_dir / f"{run.scenario.name}_time.png"
         plotting.save(plotting.plot_time(run), series)
         paths.update(loop_figure=str(loop), time_figure=str(series))
+    elif figures and run.result.setup == "driven_wave_generator":
+        from hdsim import driven_plots
+
+        deviation = out_dir / f"{run.scenario.name}_deviation.png"
+        plotting.save(driven_plots.plot_deviation(run), deviation)
+        series = out_dir / f"{run.scenario.name}_time.png"
+        plotting.save(driven_plots.plot_driven_time(run), series)
+        paths.update(deviation_figure=str(deviation), time_figure=str(series))
     return paths
