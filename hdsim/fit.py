@@ -646,17 +646,11 @@ class FitResult:
 
 def load_fitted(path) -> HarmonicDrive:
     """A :class:`HarmonicDrive` from a file written by :meth:`FitResult.save`."""
-    import tomllib
-
     from hdsim.catalog import load_unit
+    from hdsim.scenario import read_toml
 
     path = Path(path)
-    try:
-        doc = tomllib.loads(path.read_text())
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such file") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path}: not valid TOML: {exc}") from None
+    doc = read_toml(path, "fit")
     if doc.get("format") != "hdsim-fit-1":
         raise InputError(f"{path}: not an hdsim fit file (format = 'hdsim-fit-1' expected)")
     model = load_unit(doc.get("unit") or None)

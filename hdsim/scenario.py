@@ -173,18 +173,22 @@ def _validate(table, schema, source, prefix):
             table[key] = _coerce(value, schema[key], name, source)
 
 
-def load_scenario(path) -> Scenario:
-    """Read and validate a scenario TOML file; one-line `InputError` on any problem."""
+def read_toml(path, kind: str = "TOML") -> dict:
+    """A TOML file as a dict; one-line `InputError` naming the file on any problem."""
     path = Path(path)
     try:
-        data = tomllib.loads(path.read_text())
+        return tomllib.loads(path.read_text())
     except FileNotFoundError:
-        raise InputError(f"{path}: scenario file not found") from None
+        raise InputError(f"{path}: {kind} file not found") from None
+    except IsADirectoryError:
+        raise InputError(f"{path}: is a directory, expected a {kind} .toml file") from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise InputError(f"{path}: not valid TOML: {exc}") from None
-    except IsADirectoryError:
-        raise InputError(f"{path}: is a directory, expected a scenario .toml file") from None
-    return Scenario(data, str(path))
+
+
+def load_scenario(path) -> Scenario:
+    """Read and validate a scenario TOML file; one-line `InputError` on any problem."""
+    return Scenario(read_toml(path, "scenario"), str(path))
 
 
 def builtin_scenario_path(name: str) -> Path:

@@ -79,6 +79,15 @@ def print_metrics(title: str, metrics: dict[str, float], stream=sys.stdout) -> N
         print(f"  {name:<{width}}  {value:.6g}", file=stream)
 
 
+def _figures(setup: str) -> dict:
+    """The figures a person looks at for each bench set-up: name -> plot function."""
+    from hdsim import driven_plots, plotting
+
+    if setup == "driven_wave_generator":
+        return {"deviation": driven_plots.plot_deviation, "time": driven_plots.plot_driven_time}
+    return {"loop": plotting.plot_loop, "time": plotting.plot_time}
+
+
 def write_outputs(run, out_dir: Path, figures: bool = True) -> dict[str, str]:
     """HDF5 result and figures for a finished run; returns the paths written."""
     from hdsim import plotting
@@ -86,18 +95,9 @@ def write_outputs(run, out_dir: Path, figures: bool = True) -> dict[str, str]:
 
     out_dir = Path(out_dir)
     paths = {"result": str(write_result(out_dir / f"{run.scenario.name}.h5", run))}
-    if figures and run.result.setup == "locked_wave_generator":
-        loop = out_dir / f"{run.scenario.name}_loop.png"
-        plotting.save(plotting.plot_loop(run), loop)
-        series = out_dir / f"{run.scenario.name}_time.png"
-        plotting.save(plotting.plot_time(run), series)
-        paths.update(loop_figure=str(loop), time_figure=str(series))
-    elif figures and run.result.setup == "driven_wave_generator":
-        from hdsim import driven_plots
-
-        deviation = out_dir / f"{run.scenario.name}_deviation.png"
-        plotting.save(driven_plots.plot_deviation(run), deviation)
-        series = out_dir / f"{run.scenario.name}_time.png"
-        plotting.save(driven_plots.plot_driven_time(run), series)
-        paths.update(deviation_figure=str(deviation), time_figure=str(series))
+    if figures:
+        for kind, draw in _figures(run.result.setup).items():
+            path = out_dir / f"{run.scenario.name}_{kind}.png"
+            plotting.save(draw(run), path)
+            paths[f"{kind}_figure"] = str(path)
     return paths
