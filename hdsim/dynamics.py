@@ -38,11 +38,6 @@ class ElasticPath:
     def spring(self, twist):
         return self.model.hardening.torque(twist, self.c_struct, self.c_mesh)
 
-    def tangent(self, twist):
-        """Tangent stiffness of the spring behind the dead zone [N·m/rad] (0 in the gap)."""
-        engaged, contact = self.model.backlash.engage(twist)
-        return self.model.hardening.tangent(engaged, self.c_struct, self.c_mesh) * contact
-
     def evaluate(self, twist, twist_rate, friction_states):
         """(torque [N·m], friction state rates, hysteretic twist [rad])."""
         model = self.model

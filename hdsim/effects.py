@@ -140,7 +140,6 @@ class NoBacklash(Effect):
 
     family: ClassVar[str] = "backlash"
     id: ClassVar[str] = "none"
-    gap = 0.0
 
     def engage(self, twist):
         """(twist seen by the spring, contact factor 0…1) for a twist across the dead zone."""
