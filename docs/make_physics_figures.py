@@ -298,7 +298,7 @@ def figure_stiffness():
     for s in (-s_max, s_max):
         bx.axhline(s, color="0.6", lw=0.8, ls="--")
     bx.axvline(m.friction.slip_torque, color="C1", lw=0.8, ls=":")
-    bx.axvline(-m.friction.slip_torque, color="C1", lw=0.8, ls=":", label="± slip torque F = 0.04 T_N")
+    bx.axvline(-m.friction.slip_torque, color="C1", lw=0.8, ls=":", label=f"± slip torque F = {m.friction.slip_torque / m.drive.rated_torque:.2f} T_N")
     bx.set_xlabel("output torque [N·m]")
     bx.set_ylabel("micro-slip s [arcmin]")
     bx.set_title("dahl_slip state: stops at ±s_max")

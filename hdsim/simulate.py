@@ -24,10 +24,10 @@ class SolverOptions:
 
     Radau is the default: the drive is a lightly damped mode at hundreds of hertz
     inside a test lasting seconds; Radau is L-stable, while the higher-order BDF
-    formulas inside LSODA and BDF lose stability near the imaginary axis. Measured on
-    the default stiffness test (rtol 1e-6): Radau 2.6 s, LSODA 3.4 s, BDF 4.4 s; on a
-    512-row lost-motion batch at rtol 1e-5 Radau and LSODA are within 5 % of each other
-    (docs/physics.md, "Numerics"). Kinks in the laws cost far more than the method.
+    formulas inside LSODA and BDF lose stability near the imaginary axis. Batches use
+    the block-diagonal variant (`hdsim.block_radau`). Measured figures are in
+    docs/physics.md, "Numerics" (`python docs/make_physics_figures.py --solvers`);
+    kinks in the laws cost far more than the choice of method.
     """
 
     method: str = "Radau"
