@@ -1,4 +1,6 @@
-"""Equations of motion: the elastic path and the two bench set-ups as ODE systems.
+"""Equations of motion: the elastic path and the locked-wave-generator bench as an ODE system.
+
+(The driven bench is `hdsim.driven`; it uses the same `ElasticPath` and `ODESystem`.)
 
 A system is a right-hand side ``rhs(t, y)`` over named states plus a function that
 computes labelled output signals from a solution. It is built once per (batch)
@@ -6,7 +8,8 @@ model: parameters are flattened to floats/arrays here, not looked up per call.
 
 Batches: with ``M`` parameter sets the state vector is laid out sample-major,
 ``y[m * n + i]`` = state ``i`` of sample ``m``, so the Jacobian is block diagonal
-with bandwidth ``n − 1`` and LSODA's banded solver costs O(M).
+with ``n × n`` blocks: `ODESystem.block_jacobian` and `hdsim.block_radau` keep the
+linear algebra O(M).
 """
 
 from __future__ import annotations
@@ -132,14 +135,14 @@ def locked_wave_generator(model: HarmonicDrive, torque: Callable) -> ODESystem:
         theta, omega = states["theta_out"].T, states["omega_out"].T
         fstates = np.array([states[s].T for s in path.friction_states]).reshape(-1, *theta.shape)
         tau, _, hysteretic = path.evaluate(theta, omega, fstates)
-        applied = np.broadcast_to(np.array([np.broadcast_to(torque(ti), (M,)) for ti in t]), theta.shape)
+        applied = np.broadcast_to(torque(t[:, None]), theta.shape)  # profiles are vectorised in t
         signals = {"torque_Nm": applied, "twist_rad": theta, "drive_torque_Nm": tau,
                    "hysteretic_twist_rad": np.broadcast_to(hysteretic, theta.shape)}
         return {name: np.ascontiguousarray(value.T) for name, value in signals.items()}
 
-    theta_scale = np.max(np.asarray(model.drive.rated_torque) * 1e-2 / np.asarray(model.base_stiffness))
+    torque_scale = np.max(np.asarray(model.drive.rated_torque)) * 1e-2
+    theta_scale = np.max(torque_scale / np.asarray(model.base_stiffness))
     omega_scale = theta_scale * np.max(np.sqrt(np.asarray(model.base_stiffness) / J))
-    scales = np.array([theta_scale, omega_scale] + [theta_scale] * len(path.friction_states))
-    if model.friction.kind == "parallel":
-        scales[2:] = theta_scale
+    friction_scale = torque_scale if model.friction.state_unit == "N·m" else theta_scale
+    scales = np.array([theta_scale, omega_scale] + [friction_scale] * len(path.friction_states))
     return ODESystem("locked_wave_generator", names, M, rhs, np.zeros(n * M), outputs, scales)

@@ -34,12 +34,12 @@ def param(doc: str, unit: str, lower: float = 0.0, upper: float = np.inf, positi
     return field(metadata={"doc": doc, "unit": unit, "bounds": (lower, upper), "positive": positive})
 
 
-class Effect:
-    """Base of all effects: parameter listing and bound checks."""
+class Parameters:
+    """Base of every parameter holder (effects, wave generator, drive data, calibration):
+    bound checks on construction and the listing of fields with their metadata."""
 
-    family: ClassVar[str] = ""
-    id: ClassVar[str] = ""
-    state_names: ClassVar[tuple[str, ...]] = ()
+    #: dotted-name prefix used in messages (``drive``, ``wave_generator`` …)
+    prefix: ClassVar[str] = ""
 
     def __post_init__(self):
         for f in fields(self):
@@ -50,7 +50,7 @@ class Effect:
                 bad |= value <= 0.0
             if np.any(bad):
                 raise InputError(
-                    f"{self.family}.{f.name} = {np.atleast_1d(value)[np.argmax(np.atleast_1d(bad))]:g} "
+                    f"{self.prefix}.{f.name} = {np.atleast_1d(value)[np.argmax(np.atleast_1d(bad))]:g} "
                     f"is outside [{lower:g}, {upper:g}] {f.metadata['unit']}")
 
     def params(self) -> dict:
@@ -59,6 +59,20 @@ class Effect:
     @classmethod
     def param_meta(cls) -> dict:
         return {f.name: dict(f.metadata) for f in fields(cls)}
+
+
+class Effect(Parameters):
+    """Base of all effects: one family each, with the states its memory needs."""
+
+    family: ClassVar[str] = ""
+    id: ClassVar[str] = ""
+    state_names: ClassVar[tuple[str, ...]] = ()
+    #: unit of each state, "rad" or "N·m": sets the solver's absolute tolerance
+    state_unit: ClassVar[str] = "rad"
+
+    @property
+    def prefix(self) -> str:
+        return self.family
 
 
 # --------------------------------------------------------------------------- hardening
@@ -238,6 +252,7 @@ class DahlFriction(NoFriction):
     id: ClassVar[str] = "dahl"
     kind: ClassVar[str] = "parallel"
     state_names: ClassVar[tuple[str, ...]] = ("torque",)
+    state_unit: ClassVar[str] = "N·m"
     torque_max: float = param("Coulomb (saturation) torque", "N·m", positive=True)
     sigma: float = param("initial (sticking) stiffness", "N·m/rad", positive=True)
 

@@ -10,6 +10,7 @@ integrates for all parameter sets at once.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields, replace
+from typing import ClassVar
 
 import numpy as np
 
@@ -22,7 +23,7 @@ SLOTS = ("hardening", "backlash", "friction", "damping", "kinematic_error")
 
 
 @dataclass(frozen=True, eq=False)
-class WaveGenerator:
+class WaveGenerator(fx.Parameters):
     """Wave generator data that set the radial support of the teeth."""
 
     k_bearing: float = fx.param("radial stiffness of the WG bearing per engagement zone", "N/m",
@@ -30,28 +31,27 @@ class WaveGenerator:
     balls: float = fx.param("ball count of the WG bearing", "-", 3, 200)
     engagement_fraction: float = fx.param(
         "circumference share of one engagement zone at light load", "-", 0.01, 0.5)
-
-    def __post_init__(self):
-        fx.Effect.__post_init__(self)
+    prefix: ClassVar[str] = "wave_generator"
 
 
 @dataclass(frozen=True, eq=False)
-class DriveData:
+class DriveData(fx.Parameters):
     """Ratio, rating and inertias of the drive on its test bench."""
 
     ratio: float = fx.param("transmission ratio N (output turns 1/N per WG turn)", "-", -1e4, 1e4)
     rated_torque: float = fx.param("rated output torque T_N", "N·m", positive=True)
     J_in: float = fx.param("inertia on the wave-generator shaft (motor + WG)", "kg·m²", positive=True)
     J_out: float = fx.param("inertia on the output (flange + load fixture)", "kg·m²", positive=True)
+    prefix: ClassVar[str] = "drive"
 
     def __post_init__(self):
-        fx.Effect.__post_init__(self)
+        super().__post_init__()
         if np.any(np.abs(np.asarray(self.ratio)) < 1.0):
             raise InputError("drive.ratio must be at least 1 in magnitude")
 
 
 @dataclass(frozen=True, eq=False)
-class Calibration:
+class Calibration(fx.Parameters):
     """Per-unit calibration of the closed forms against the catalog (see docs/physics.md).
 
     ``kappa_mesh`` multiplies the closed-form mesh-zone compliance so that the nominal
@@ -60,9 +60,7 @@ class Calibration:
     """
 
     kappa_mesh: float = fx.param("mesh-zone compliance factor", "-", 1e-3, 1e3)
-
-    def __post_init__(self):
-        fx.Effect.__post_init__(self)
+    prefix: ClassVar[str] = "calibration"
 
 
 @dataclass(frozen=True)

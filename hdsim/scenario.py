@@ -62,6 +62,8 @@ class Scenario:
     source: str = "<dict>"
 
     def __post_init__(self):
+        # validation coerces values in place: work on our own copy, never the caller's dict
+        object.__setattr__(self, "data", copy.deepcopy(self.data))
         if not isinstance(self.data.get("name"), str):
             raise InputError(f"{self.source}: missing 'name'")
         if self.setup not in SETUP_SCHEMAS:

@@ -91,3 +91,10 @@ def test_batch_geometry_names_the_bad_sample():
 def test_size_number_is_pitch_diameter_in_tenths_of_an_inch():
     g = nominal_geometry(25, 100)
     assert 2 * g.pitch_radius == pytest.approx(63.5e-3, rel=1e-12)
+
+
+@pytest.mark.parametrize("name, value", [("wave_generator.balls", 1.0), ("drive.J_out", -1.0),
+                                         ("calibration.kappa_mesh", 0.0)])
+def test_out_of_range_unit_data_is_refused_by_name(name, value):
+    with pytest.raises(InputError, match=name.replace(".", r"\.")):
+        load_unit().with_updates({name: value})
