@@ -40,11 +40,13 @@ def _last_segment(levels, start, end):
 
 
 def _interp_rows(x_rows, y_rows, x0):
-    """Per row, y at x = x0 by linear interpolation (x monotonic along a ramp)."""
+    """Per row, y at x = x0 (a scalar or one value per row) by linear interpolation
+    (x monotonic along a ramp)."""
+    x0 = np.broadcast_to(x0, (x_rows.shape[0],))
     out = np.empty(x_rows.shape[0])
     for m, (x, y) in enumerate(zip(x_rows, y_rows)):
         order = np.argsort(x)
-        out[m] = np.interp(x0, x[order], y[order], left=np.nan, right=np.nan)
+        out[m] = np.interp(x0[m], x[order], y[order], left=np.nan, right=np.nan)
     return out
 
 
@@ -76,11 +78,9 @@ def hysteresis_loss(torque, twist, levels, n):
 def lost_motion_centre_line(torque, twist, levels, n, level_torque):
     """Span of the loop mid-line between ±``level_torque`` [rad] (odd symmetry assumed)."""
     (td, pd), (tu, pu) = _branches(torque, twist, levels, n)
-    level_torque = np.broadcast_to(level_torque, (torque.shape[0],))
+    level_torque = np.asarray(level_torque, dtype=float)
     mid0 = 0.5 * (_interp_rows(td, pd, 0.0) + _interp_rows(tu, pu, 0.0))
-    mid_minus = np.array([0.5 * (_interp_rows(td[m:m + 1], pd[m:m + 1], -L)[0]
-                                 + _interp_rows(tu[m:m + 1], pu[m:m + 1], -L)[0])
-                          for m, L in enumerate(level_torque)])
+    mid_minus = 0.5 * (_interp_rows(td, pd, -level_torque) + _interp_rows(tu, pu, -level_torque))
     return 2.0 * (mid0 - mid_minus)
 
 
