@@ -8,7 +8,6 @@ from pathlib import Path
 
 import numpy as np
 
-from hdsim.catalog import load_unit
 from hdsim.effects import FAMILIES, NO_EFFECT
 from hdsim.errors import InputError, unknown_name
 from hdsim.model import HarmonicDrive
@@ -62,10 +61,6 @@ def apply_sets(model: HarmonicDrive, scenario: Scenario, sets: dict[str, str]):
     model = model.with_updates(params) if params else model
     model = model.with_effects(**effect_switches) if effect_switches else model
     return model, scenario
-
-
-def unit(name: str | None) -> HarmonicDrive:
-    return load_unit(name)
 
 
 def metrics_as_floats(metrics: dict) -> dict[str, float]:

@@ -6,7 +6,7 @@ import sys
 import time
 from pathlib import Path
 
-from hdsim.catalog import catalog_entry, default_unit
+from hdsim.catalog import catalog_entry, default_unit, load_unit
 from hdsim.commands import _common
 from hdsim.run import run_scenario
 from hdsim.scenario import builtin_scenario_path, load_scenario
@@ -25,7 +25,7 @@ def register(subparsers) -> None:
 
 def main(args) -> int:
     start = time.perf_counter()
-    model = _common.unit(args.unit)
+    model = load_unit(args.unit)
     catalog = catalog_entry(model.name)
     scenarios = [load_scenario(builtin_scenario_path(name)) for name in ("lost_motion", "stiffness")]
     out = Path(args.out)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from hdsim.catalog import load_unit
 from hdsim.commands import _common
 from hdsim.run import run_scenario
 from hdsim.scenario import load_scenario
@@ -26,7 +27,7 @@ def register(subparsers) -> None:
 def main(args) -> int:
     # everything that can be wrong with the input is checked before anything is written
     scenario = load_scenario(args.scenario)
-    model, scenario = _common.apply_sets(_common.unit(args.unit), scenario, _common.parse_sets(args.sets))
+    model, scenario = _common.apply_sets(load_unit(args.unit), scenario, _common.parse_sets(args.sets))
     run = run_scenario(model, scenario)
     paths = _common.write_outputs(run, Path(args.out), figures=not args.no_figures)
     metrics = _common.metrics_as_floats(run.metrics)
