@@ -55,7 +55,7 @@ from __future__ import annotations
 import bisect
 import csv
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable
 
@@ -68,7 +68,7 @@ from hdsim.input_friction import NO_INPUT_FRICTION, InputFriction, for_unit
 from hdsim.model import HarmonicDrive
 from hdsim.scenario import Scenario
 from hdsim.simulate import SimulationResult, SolverOptions, integrate
-from hdsim.units import arcsec_to_rad, rad_to_arcsec, rpm_to_rad_per_s
+from hdsim.units import arcsec_to_rad, rad_per_s_to_rpm, rad_to_arcsec, rpm_to_rad_per_s
 
 SETUP = "driven_wave_generator"
 TWO_PI = 2.0 * np.pi
@@ -92,9 +92,9 @@ class Motion:
     description: str = ""
 
 
-def _hold(t_end: float, windows=None) -> Motion:
+def _hold(t_end: float) -> Motion:
     zero = lambda t: np.zeros_like(np.asarray(t, dtype=float))  # noqa: E731
-    return Motion(zero, zero, zero, float(t_end), dict(windows or {}), 0.0, "hold")
+    return Motion(zero, zero, zero, float(t_end), {}, 0.0, "hold")
 
 
 class SpeedKnots:
@@ -244,6 +244,8 @@ def sine_motion(amplitude, frequency, cycles, dwell_s=0.0) -> Motion:
 
 # ------------------------------------------------------------------ measured profile (CSV)
 _ANGLE_UNITS = {"rad": 1.0, "deg": np.pi / 180.0, "arcmin": np.pi / 10800.0, "arcsec": np.pi / 648000.0}
+#: columns whose cells must be numbers (others are ignored, NaN if not numeric)
+_WANTED = {"time_s", "torque_Nm", "wg_speed_rpm", "wg_speed_rad_per_s"} | {f"wg_angle_{u}" for u in _ANGLE_UNITS}
 
 
 def read_profile_csv(path) -> dict[str, np.ndarray]:
@@ -279,7 +281,7 @@ def read_profile_csv(path) -> dict[str, np.ndarray]:
             try:
                 columns[name][r] = float(cell)
             except ValueError:
-                if name in _wanted(header):
+                if name in _WANTED:
                     raise InputError(f"{path}: line {lineno}, column {name}: '{cell.strip()[:30]}' is not a "
                                      "number") from None
                 columns[name][r] = np.nan
@@ -308,11 +310,6 @@ def read_profile_csv(path) -> dict[str, np.ndarray]:
         k = int(np.flatnonzero(np.diff(out["time"]) <= 0.0)[0])
         raise InputError(f"{path}: time_s is not strictly increasing at data row {k + 2}")
     return out
-
-
-def _wanted(header):
-    keep = {"time_s", "torque_Nm", "wg_speed_rpm", "wg_speed_rad_per_s"}
-    return keep | {f"wg_angle_{u}" for u in _ANGLE_UNITS}
 
 
 def csv_motion(profile: dict) -> Motion:
@@ -642,6 +639,7 @@ def driven_wave_generator(model: HarmonicDrive, motion: Motion, load: Load = NO_
         wg_force = tau * (1.0 / N + e_w)
         acc_o = (T_L - out_force) / J_out
         T_f = fr.torque(w_w, th_w) if friction_on else 0.0 * w_w
+        w_cmd = None
         if prescribed:
             acc_w = a_ref
             T_m = J_in * a_ref + T_f - wg_force
@@ -655,7 +653,7 @@ def driven_wave_generator(model: HarmonicDrive, motion: Motion, load: Load = NO_
             acc_w = (T_m - T_f + wg_force) / J_in
         return dict(th_w=th_w, w_w=w_w, acc_w=acc_w, q=q, qd=qd, th_o=th_o, w_o=w_o, acc_o=acc_o,
                     T_L=T_L, e=e, e_f=e_f, frac_rate=frac_rate, delta=delta, delta_rate=delta_rate, tau=tau,
-                    rates=rates, hyst=hyst, T_m=T_m, T_f=T_f)
+                    rates=rates, hyst=hyst, T_m=T_m, T_f=T_f, w_cmd=w_cmd)
 
     def rhs(t, y):
         t = float(t)
@@ -669,7 +667,7 @@ def driven_wave_generator(model: HarmonicDrive, motion: Motion, load: Load = NO_
         dx[iq] = c["qd"]
         dx[iq + 1] = c["acc_o"] - c["acc_w"] / N
         if mode == "pi":
-            dx[len(mech)] = controller.command(motion.speed(t), motion.angle(t), c["th_w"]) - c["w_w"]
+            dx[len(mech)] = c["w_cmd"] - c["w_w"]
         for i, r in enumerate(c["rates"]):
             dx[i_fric + i] = r
         if track_energy:
@@ -716,9 +714,7 @@ def driven_wave_generator(model: HarmonicDrive, motion: Motion, load: Load = NO_
     y0[:, iq] = np.broadcast_to(e0, (M,))
     y0[:, iq + 1] = np.broadcast_to(e_w0 * w_w0 + e_o0 * w_w0 / N, (M,))
     system = ODESystem(SETUP, names, M, rhs, y0.ravel(), outputs, state_scales)
-    system.core = core  # for energy bookkeeping (tests, docs)
-    system.path = path
-    system.ratio = N
+    system.path = path  # for energy_balance
     system.J = (J_in, J_out)
     return system
 
@@ -903,8 +899,7 @@ def bench_from_scenario(model: HarmonicDrive, scenario: Scenario) -> Bench:
         schedule = [(0.0, t_s, 1.0 / load_ramp)]
         schedule += [(a, b, f0 * (f1 / f0) ** ((b - t_s) / sweep_s)) for a, b in zip(edges[:-1], edges[1:])]
         schedule.append((t_s + sweep_s, t_e, f1))
-        load = Load(load.torque, load.rate, load.t_end, load.windows, operating_point=torque,
-                    sweep_start=f0, frequency_schedule=schedule)
+        load = replace(load, operating_point=torque, sweep_start=f0, frequency_schedule=schedule)
     else:
         load = csv_load(csv_data)
     load_inertia = _positive(ld, "inertia", 0.0, src, allow_zero=True)
@@ -933,8 +928,7 @@ def bench_from_scenario(model: HarmonicDrive, scenario: Scenario) -> Bench:
     if profile == "hold" and load.t_end and "hold_s" not in inp:
         motion = _hold(t_end)
     windows = {**motion.windows, **{k: (a, min(b, t_end)) for k, (a, b) in load.windows.items()}}
-    motion = Motion(motion.angle, motion.speed, motion.accel, motion.t_end, windows, motion.max_speed,
-                    motion.description)
+    motion = replace(motion, windows=windows)
     out = data.get("output", {})
     per_rev = int(out.get("samples_per_wg_rev", 64))
     rate = max(_positive(out, "sample_rate_Hz", 1000.0, src), per_rev * motion.max_speed / TWO_PI)
@@ -973,13 +967,10 @@ def linear_model(model: HarmonicDrive, bench: Bench, load_fraction: float, x_op=
         x_op = operating_point(model, bench, load_fraction)[0]
     hold = _hold(1.0)
 
-    def build(u):
-        system = driven_wave_generator(model, hold, constant_load(u), mode=bench.mode,
-                                       controller=bench.controller, input_friction=bench.input_friction,
-                                       load_inertia=bench.load_inertia)
-        # python-control refuses '.' in signal names (friction.slip → friction_slip)
-        system.state_names = tuple(name.replace(".", "_") for name in system.state_names)
-        return system
+    def build(u):  # linearize renames friction.slip → friction_slip for python-control
+        return driven_wave_generator(model, hold, constant_load(u), mode=bench.mode,
+                                     controller=bench.controller, input_friction=bench.input_friction,
+                                     load_inertia=bench.load_inertia)
 
     full = linearize(build, x_op, load_fraction * TN, input_name="load_torque_Nm", input_scale=TN)
     names = list(full.state_labels)
@@ -1017,8 +1008,6 @@ def linear_summary(sys) -> dict:
 def drive_tangent_stiffness(model: HarmonicDrive, bench: Bench, load_fraction: float) -> float:
     """Tangent stiffness of the drive [N·m/rad] at ``load_fraction`` × T_N with the WG held
     (spring, micro-slip and backlash in series), whatever the scenario's input mode."""
-    from dataclasses import replace
-
     held = replace(bench, mode="prescribed", controller=None)
     return linear_summary(linear_model(model, held, load_fraction))["tangent_stiffness"]
 
@@ -1203,7 +1192,7 @@ def driven_metrics(model, scenario, bench: Bench, result: SimulationResult) -> d
         elif group == "running_torque":
             (window,) = need("constant")
             out["running_torque_mNm"] = 1e3 * ke_metrics.window_mean(t, s["motor_torque_Nm"], window)
-            out["running_speed_rpm"] = np.full(M, bench.motion.max_speed * 60.0 / TWO_PI)
+            out["running_speed_rpm"] = np.full(M, rad_per_s_to_rpm(bench.motion.max_speed))
         elif group == "starting_torque":
             out["starting_torque_mNm"] = 1e3 * starting_torque(model, bench.input_friction)
         elif group in ("linearisation", "frequency_response"):

@@ -13,6 +13,7 @@ matplotlib.use("Agg", force=False)
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from hdsim.plotting import _axes  # noqa: E402
 from hdsim.units import rad_to_arcsec  # noqa: E402
 
 
@@ -22,9 +23,7 @@ def _ratio(run) -> float:
 
 def plot_deviation(run, ax=None, sample: int = 0):
     """Deviation θ_out − θ_WG/N against output angle over the measured passes (or against time)."""
-    if ax is None:
-        fig, ax = plt.subplots(figsize=(8.0, 4.0), layout="constrained")
-    fig = ax.figure
+    fig, ax = _axes(ax, figsize=(8.0, 4.0))
     s, t = run.result.signals, run.result.t
     windows = run.result.metadata.get("windows", {})
     N = _ratio(run)
