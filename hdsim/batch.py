@@ -72,7 +72,7 @@ class ScenarioMetric:
     def __call__(self, X) -> np.ndarray:
         X = np.atleast_2d(np.asarray(X, dtype=float))
         y = np.full(len(X), np.nan)
-        valid = np.array([self._valid(row) for row in X], dtype=bool)
+        valid = self._valid_rows(X)
         if valid.any():
             y[valid] = self._evaluate(X[valid])
         return y
@@ -86,6 +86,16 @@ class ScenarioMetric:
         except InputError:
             return False
         return True
+
+    def _valid_rows(self, X) -> np.ndarray:
+        """Rows whose parameters build a model. The bound and geometry checks refuse a
+        batch when any row fails them, so one batch build clears a whole good chunk;
+        only a refused chunk is checked row by row."""
+        try:
+            self._model(X)
+        except InputError:
+            return np.array([self._valid(row) for row in X], dtype=bool)
+        return np.ones(len(X), dtype=bool)
 
     def _evaluate(self, X) -> np.ndarray:
         scenario = load_scenario(builtin_scenario_path(self.scenario))
@@ -125,10 +135,11 @@ class ScenarioSeries:
     def __call__(self, X) -> np.ndarray:
         X = np.atleast_2d(np.asarray(X, dtype=float))
         metric = ScenarioMetric(self.unit, self.names, "", self.scenario)
-        Y = np.full((len(X), self.times().size), np.nan)
-        valid = np.array([metric._valid(row) for row in X], dtype=bool)
+        scenario = self._scenario()
+        Y = np.full((len(X), scenario.sample_times(self.samples_per_segment).size), np.nan)
+        valid = metric._valid_rows(X)
         if valid.any():
-            run = run_scenario(metric._model(X[valid]), self._scenario(), options=STUDY_SOLVER,
+            run = run_scenario(metric._model(X[valid]), scenario, options=STUDY_SOLVER,
                                samples_per_segment=self.samples_per_segment)
             Y[valid] = run.result.signals[self.signal]
         return Y

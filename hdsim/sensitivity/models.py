@@ -22,13 +22,10 @@ def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, 
     """
     if not output:
         raise InputError("--unit studies need --output METRIC (e.g. lost_motion_arcmin)")
-    if range_frac is None:  # validate explicit bounds before touching the simulator
-        problem = build_problem(names, {}, None, bounds, dists)
-        batch = _batch()
-    else:
-        batch = _batch()
-        problem = build_problem(names, batch.nominal_values(unit, list(names)), range_frac,
-                                bounds, dists)
+    batch = _batch()
+    # nominal values only matter for --range; without it the unit is not loaded here
+    nominal = {} if range_frac is None else batch.nominal_values(unit, list(names))
+    problem = build_problem(names, nominal, range_frac, bounds, dists)
     func = batch.model_function(unit, list(names), output, scenario)
     model = {"unit": unit, "output": output, "scenario": scenario}
     return func, problem, output, model, None
