@@ -57,6 +57,7 @@ from hdsim.errors import InputError, unknown_name
 from hdsim.measurement import Measurement
 from hdsim.model import SLOTS, HarmonicDrive
 from hdsim.quasistatic import SUPPORTED, locked_twist, supports
+from hdsim.residuals import _direction
 
 __all__ = ["FREE", "DEFAULT_EFFECT", "FitResult", "fit", "fit_many", "parse_effects",
            "build_model", "load_fitted", "Evaluator", "FitProblem", "bic"]
@@ -311,8 +312,8 @@ class Evaluator:
         # all samples up to max_steps, else a step budget (the grid adapts to each batch)
         self.grid = None if self.n <= max_steps else int(max_steps)
         if self.test == "kinematic_error":
-            self.ideal = np.asarray(meas.wg_angle, dtype=float) / float(meas.ratio)
             wg = np.asarray(meas.wg_angle, dtype=float)
+            self.ideal = wg / float(meas.ratio)
             out = self.ideal
             cols = []
             for k in KE_WG_ORDERS:
@@ -324,8 +325,6 @@ class Evaluator:
             self.ideal = np.zeros(self.n)
             self.ke_basis = np.zeros((self.n, 0))
         self.y_rel = self.y - self.ideal
-        # twist scale (for relative finite-difference checks)
-        self.scale = max(float(np.std(self.y_rel)), 1e-12)
 
     def basis(self, with_ke: bool) -> np.ndarray:
         ones = np.ones((self.n, 1))
@@ -367,7 +366,6 @@ class FitProblem:
     done: bool = False
     iterations: int = 0
     stalls: int = 0
-    history: list = field(default_factory=list)
 
     def __post_init__(self):
         self.transforms = [_transform(self.model, name) for name in self.names]
@@ -473,7 +471,6 @@ def _update(p: FitProblem, r_rows: np.ndarray, has_base: int, steps, trials, tol
         p.r = r0
         p.cost = float(r0 @ r0)
         p.J = ((r_rows[1:1 + k] - r0) / steps[:, None]).T if k else np.zeros((r0.size, 0))
-        p.history.append(p.cost)
         if k == 0:
             p.done = True
         return
@@ -502,7 +499,6 @@ def _update(p: FitProblem, r_rows: np.ndarray, has_base: int, steps, trials, tol
         p.lam = min(p.lam * 100.0, 1e10)
         p.stalls += 1
     p.J = J_new
-    p.history.append(p.cost)
     if p.stalls >= 2 or p.iterations >= p.max_iter or p.lam >= 1e10:
         p.done = True
 
@@ -677,12 +673,17 @@ def load_fitted(path) -> HarmonicDrive:
 # --------------------------------------------------------------------------- start values
 
 
+def _relative_angle(meas: Measurement) -> np.ndarray:
+    """Angle relative to the kinematic ideal [rad] (stiffness test: the angle itself)."""
+    if meas.test == "kinematic_error":
+        return meas.kinematic_error
+    return np.asarray(meas.angle, dtype=float)
+
+
 def loading_slope(meas: Measurement, lo: float = 0.1, hi: float = 0.5) -> float:
     """Secant stiffness [N·m/rad] from angle vs torque for lo < |T|/max|T| < hi."""
     T = np.asarray(meas.torque, dtype=float)
-    y = np.asarray(meas.angle, dtype=float)
-    if meas.test == "kinematic_error":
-        y = y - np.asarray(meas.wg_angle) / meas.ratio
+    y = _relative_angle(meas)
     a = np.abs(T) / max(np.max(np.abs(T)), 1e-12)
     m = (a > lo) & (a < hi)
     if np.count_nonzero(m) < 5 or np.ptp(T[m]) <= 0:
@@ -696,19 +697,14 @@ def loading_slope(meas: Measurement, lo: float = 0.1, hi: float = 0.5) -> float:
 def zero_torque_signatures(meas: Measurement) -> dict:
     """Loop width and step at zero torque [rad], median |dT/dt| [N·m/s]."""
     T = np.asarray(meas.torque, dtype=float)
-    y = np.asarray(meas.angle, dtype=float)
-    if meas.test == "kinematic_error":
-        y = y - np.asarray(meas.wg_angle) / meas.ratio
-    t = np.asarray(meas.time, dtype=float)
+    y = _relative_angle(meas)
     Tmax = max(np.max(np.abs(T)), 1e-12)
-    k = max(int(T.size // 400), 1)
-    Ts = np.convolve(T, np.ones(2 * k + 1) / (2 * k + 1), mode="same")
-    rate = np.gradient(Ts, t)
-    out = {"loop_width": 0.0, "step": 0.0, "rate": float(np.median(np.abs(rate)))}
+    sign, speed = _direction(meas.time, T)
+    out = {"loop_width": 0.0, "step": 0.0, "rate": float(np.median(speed))}
     near = (np.abs(T) < 0.15 * Tmax) & (np.abs(T) > 0.02 * Tmax)
     values = {}
     for direction in (+1, -1):
-        on = near & (np.sign(rate) == direction)
+        on = near & (sign == direction)
         pos, neg = on & (T > 0), on & (T < 0)
         if np.count_nonzero(pos) >= 3 and np.count_nonzero(neg) >= 3:
             cp = np.polyfit(T[pos], y[pos], 1)

@@ -56,10 +56,9 @@ def _label(step) -> str:
 
 def _x(meas):
     """Angle relative to the kinematic ideal [rad] (stiffness test: the angle itself)."""
-    y = np.asarray(meas.angle, dtype=float)
     if meas.test == "kinematic_error":
-        y = y - np.asarray(meas.wg_angle) / meas.ratio
-    return y
+        return meas.kinematic_error
+    return np.asarray(meas.angle, dtype=float)
 
 
 def write_report(diagnosis, folder) -> Path:
@@ -175,7 +174,6 @@ def _loop_by_rate(v):
     pos = rate[rate > 0]
     if pos.size < 10:
         return [], []
-    edges = np.quantile(pos, [0.0, 0.5, 1.0])
     levels = np.unique(np.round(np.log(pos) / 0.2))
     out_r, out_w = [], []
     for lv in levels:
@@ -187,7 +185,6 @@ def _loop_by_rate(v):
             continue
         out_r.append(float(np.median(rate[m])))
         out_w.append(float(np.mean(r[down]) - np.mean(r[up])))
-    del edges
     return out_r, out_w
 
 

@@ -90,11 +90,13 @@ def order_spectrum(angle, r, max_order: float = 8.0, n_orders: int = 800):
 
 
 def _direction(time, torque):
+    """(sign, magnitude) of the smoothed loading rate dT/dt [N·m/s]."""
     t = np.asarray(time, dtype=float)
     T = np.asarray(torque, dtype=float)
     k = max(int(T.size // 400), 1)
     smooth = np.convolve(T, np.ones(2 * k + 1) / (2 * k + 1), mode="same")
-    return np.sign(np.gradient(smooth, t)), np.abs(np.gradient(smooth, t))
+    rate = np.gradient(smooth, t)
+    return np.sign(rate), np.abs(rate)
 
 
 def views(meas, residual) -> dict:
