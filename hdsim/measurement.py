@@ -275,8 +275,8 @@ def _interpret_meta(
     origin = origin or {}
     tests = " or ".join(TESTS)
     if "test" not in meta:
-        raise where.fail(f"no '# test:' key; expected '# test: stiffness' or "
-                         f"'# test: kinematic_error' (HDF5: a 'test' attribute)")
+        raise where.fail("no '# test:' key; expected '# test: stiffness' or "
+                         "'# test: kinematic_error' (HDF5: a 'test' attribute)")
     test = meta["test"].strip()
     if test not in TESTS:
         close = difflib.get_close_matches(test, list(TESTS), n=1, cutoff=0.5)
