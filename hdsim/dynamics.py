@@ -33,6 +33,9 @@ class ElasticPath:
         c_struct, c_mesh = self.model.split()
         object.__setattr__(self, "c_struct", c_struct)
         object.__setattr__(self, "c_mesh", c_mesh)
+        # stiffness at zero twist: the body's rest twist in the gap is −z/K₀
+        object.__setattr__(self, "base_tangent",
+                           self.model.hardening.tangent(0.0, c_struct, c_mesh))
 
     @property
     def friction_states(self) -> tuple[str, ...]:
@@ -45,6 +48,8 @@ class ElasticPath:
         """(torque [N·m], friction state rates, hysteretic twist [rad])."""
         model = self.model
         friction = model.friction
+        if friction.kind == "body":
+            return self._evaluate_body(twist, twist_rate, friction_states)
         hysteretic = friction.series_twist(friction_states) if friction.kind == "series" else 0.0
         elastic_twist = twist - hysteretic
         engaged, contact = model.backlash.engage(elastic_twist)
@@ -61,6 +66,28 @@ class ElasticPath:
             torque = torque + friction.parallel_torque(friction_states, twist_rate)
             rates = friction.parallel_rates(friction_states, twist_rate)
         return torque, rates, hysteretic
+
+    def _evaluate_body(self, twist, twist_rate, friction_states):
+        """Friction z in the body (spring ∥ damper ∥ friction) behind the dead zone.
+
+        The body twist is ``e = engage(x − s) + s`` with the shift ``s = −z/K₀``: in
+        contact the dead zone takes its half gap (``e = x ∓ b/2``), and in the gap the
+        body rests where its spring holds the friction torque, ``u(e) ≈ K₀ s = −z``, so
+        nothing is transmitted. Differentiating, with ``ż = D ė`` and ``D`` the Dahl
+        slope, gives ``ė = κ ẋ / (1 + (1 − κ) D/K₀)``: the body follows the output in
+        contact (κ = 1) and stands still in the gap (κ = 0). Without backlash ``e = x``
+        and the torque is ``u(x) + z + c ẋ``.
+        """
+        model = self.model
+        z = friction_states[0]
+        shift = -z / self.base_tangent
+        engaged, contact = model.backlash.engage(twist - shift)
+        slope = model.friction.body_slope(z, twist_rate)
+        body_rate = contact * twist_rate / (1.0 + (1.0 - contact) * slope / self.base_tangent)
+        elastic_torque = self.spring(engaged + shift) + z
+        damping_torque = model.damping.coefficient * body_rate
+        torque = model.backlash.contact_torque(elastic_torque, damping_torque)
+        return torque, (slope * body_rate,), 0.0
 
 
 @dataclass

@@ -8,9 +8,9 @@ vector and is passed in and out, never stored on the object.
 
 The elastic path of the drive, seen from the output, is::
 
-    output ── [backlash dead zone] ── [spring: base compliance + hardening] ── [hysteretic
-              compliance (series friction)] ── mesh (fixed by the wave generator)
-             + damping across the spring, + parallel friction torques
+    output ── [backlash dead zone] ── [body: spring (base compliance + hardening)
+              ∥ damper ∥ body friction] ── [hysteretic compliance (series friction)]
+              ── mesh (fixed by the wave generator),  + parallel friction torques
 
 Everything here is in SI: torque [N·m], twist [rad], time [s].
 """
@@ -196,8 +196,10 @@ class NoFriction(Effect):
 
     family: ClassVar[str] = "friction"
     id: ClassVar[str] = "none"
-    #: "series" effects add a hysteretic twist to the elastic path; "parallel" ones a
-    #: torque across it. Their states are laid out after the mechanical states.
+    #: "series" effects add a hysteretic twist to the elastic path, "parallel" ones a
+    #: torque across the whole path (dead zone included, like a bearing), "body" ones a
+    #: torque across the spring only, behind the dead zone. Their states are laid out
+    #: after the mechanical states.
     kind: ClassVar[str] = "none"
 
     def series_rates(self, states, twist_rate, tangent, elastic_torque):
@@ -247,20 +249,25 @@ class DahlSlip(NoFriction):
 
 @dataclass(frozen=True, eq=False)
 class DahlFriction(NoFriction):
-    """Dahl friction torque in parallel with the spring (Dahl, 1968), state z [N·m]."""
+    """Dahl friction in the flexspline body, behind the dead zone (Dahl, 1968), state z [N·m].
+
+    The body is the spring ∥ this friction ∥ the damper; the dead zone (the Oldham
+    coupling and tooth play) sits in series with it. So the backlash step lies at zero
+    torque and an unloaded body keeps the twist its friction holds (``u(e) = −z``)
+    while the output crosses the gap (docs/physics.md, "friction in the body").
+    Without backlash this is exactly a Dahl torque in parallel with the spring.
+    """
 
     id: ClassVar[str] = "dahl"
-    kind: ClassVar[str] = "parallel"
+    kind: ClassVar[str] = "body"
     state_names: ClassVar[tuple[str, ...]] = ("torque",)
     state_unit: ClassVar[str] = "N·m"
     torque_max: float = param("Coulomb (saturation) torque", "N·m", positive=True)
     sigma: float = param("initial (sticking) stiffness", "N·m/rad", positive=True)
 
-    def parallel_torque(self, states, twist_rate):
-        return states[0]
-
-    def parallel_rates(self, states, twist_rate):
-        return (fr.dahl_rate(states[0], twist_rate, self.sigma, self.torque_max),)
+    def body_slope(self, state, body_rate):
+        """dz/de = σ (1 − z/F · sgn ė) [N·m/rad] of `physics.friction.dahl_rate`, floored at 0."""
+        return np.maximum(self.sigma * (1.0 - state / self.torque_max * np.sign(body_rate)), 0.0)
 
 
 @dataclass(frozen=True, eq=False)

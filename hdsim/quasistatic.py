@@ -21,21 +21,23 @@ What it solves
 The same elastic path as :class:`hdsim.dynamics.ElasticPath`, with the library's effect
 objects and laws (the same :class:`~hdsim.model.HarmonicDrive` slots)::
 
-    x            twist across dead zone + spring (= the output angle θ)
-    e, κ         = backlash.engage(x)            engaged twist, contact factor
+    e            body twist, behind the dead zone (spring ∥ damper ∥ Dahl friction)
     u            = hardening.torque(e, C_s, C_m) spring torque
-    d            = c · κ · ẋ                     viscous damping torque
-    Φ            = backlash.contact_torque(u, d) (u + d without backlash)
-    z            Dahl friction torque, dz/dθ = σ (1 − z/F · sgn θ̇)
-    Φ + z = T(t)                                 the torque balance, inertia dropped
+    z            Dahl friction torque, dz/de = σ (1 − z/F · sgn ė)
+    d            = c · ė                         viscous damping torque
+    Φ            = backlash.contact_torque(u + z, d)   (u + z + d without backlash)
+    Φ = T(t)                                     the torque balance, inertia dropped
+    x            = s + dead_zone⁻¹(e − s), s = −z/K₀   output twist (= the angle θ)
 
 Each step from sample ``k`` to ``k+1`` solves the balance at ``t_{k+1}`` for the new
-twist with implicit (backward) Euler for ``ẋ``; the Dahl state is advanced *exactly*
-over the twist increment (the law is rate-independent: for a fixed sign of ``θ̇``,
-``z(θ) = s F − (s F − z₀) exp(−σ|Δθ|/F)``). The scalar equation per sample is monotone in
-the new twist and is solved by Newton's method kept inside a bracket (bisection when a
-Newton step leaves it), vectorised over a batch of parameter sets. Without damping
-(``c = 0``) the result does not depend on the time step at all (rate independence).
+body twist with an exponentially fitted rate for ``ė``; the Dahl state is advanced
+*exactly* over the twist increment (the law is rate-independent: for a fixed sign of
+``ė``, ``z(e) = s F − (s F − z₀) exp(−σ|Δe|/F)``). The scalar equation per sample is
+monotone in the new body twist (the dead zone is not inside it) and is solved by Newton's
+method kept inside a bracket (bisection when a Newton step leaves it), vectorised over a
+batch of parameter sets; the output twist follows in closed form but for one monotone
+inversion of the rounded dead zone. Without damping (``c = 0``) the result does not
+depend on the time step at all (rate independence).
 
 A batch may mix *models*: several :class:`HarmonicDrive` objects (each single or a batch)
 are stacked into one plan if, slot by slot, they use one effect class or none. A model
@@ -175,15 +177,19 @@ def _phi_functions(mu):
 
 
 class _Kernel:
-    """The torque balance of one step and its derivative, vectorised over the plan.
+    """The torque balance of one step in the body twist, vectorised over the plan.
+
+    The unknown is the body twist ``e`` (behind the dead zone), so the balance
+    ``Φ(u(e) + z(e), c ė) = T`` is smooth and increasing in ``e``; the output twist
+    follows from ``e`` and ``z`` afterwards (:meth:`output_twist`).
 
     Damping uses an *exponentially fitted* rate: over a step of length ``h`` with the
-    torque linear in time, the twist rate entering ``d = c κ ẋ`` is
-    ``ẋ = β Δx/h + γ ΔT/c`` with ``β = μ/(e^μ − 1)``, ``γ = (1 − β)/μ`` and
-    ``μ = k h/(c κ)`` (``k`` the tangent stiffness at the start of the step). For a linear
-    spring this makes the step *exact* for any ``h`` (the solution of ``c ẋ = T(t) − k x``
-    with ``T`` linear over the step); as ``c → 0`` it gives ``d → 0`` (rate independence)
-    and as ``h → 0`` it tends to backward Euler ``Δx/h``.
+    torque linear in time, the rate entering ``d = c ė`` is ``ė = β Δe/h + γ ΔT/c``
+    with ``β = μ/(e^μ − 1)``, ``γ = (1 − β)/μ`` and ``μ = k h/c`` (``k`` the tangent
+    stiffness of the body at the start of the step). For a linear spring this makes the
+    step *exact* for any ``h`` (the solution of ``c ė = T(t) − k e`` with ``T`` linear over
+    the step); as ``c → 0`` it gives ``d → 0`` (rate independence) and as ``h → 0`` it
+    tends to backward Euler ``Δe/h``.
     """
 
     def __init__(self, plan: Plan):
@@ -192,11 +198,12 @@ class _Kernel:
 
         self.plan = plan
         cs, cm = plan.c_struct, plan.c_mesh
+        self.k0 = 1.0 / (cs + cm)  # every supported hardening law starts from K0
         # Law arguments are computed once per evaluation; the laws themselves are the
         # library's pure functions (hdsim.physics), called exactly as the effects call them.
         hardening = plan.hardening
         if hardening.id == "none":
-            k_lin = 1.0 / (cs + cm)
+            k_lin = self.k0
             self._spring = lambda e: (k_lin * e, k_lin)
         elif hardening.id == "tanh":
             args = hardening._k(cs, cm)
@@ -209,13 +216,12 @@ class _Kernel:
         else:  # pragma: no cover - guarded by stack_models
             raise UnsupportedEffect(f"hardening '{hardening.id}'")
         backlash = plan.backlash
+        self.gap = None
         if backlash.id == "dead_zone":
-            width = backlash.contact_rounding * np.asarray(backlash.gap, dtype=float) + 1e-12
-            half = 0.5 * np.asarray(backlash.gap, dtype=float)
-            self._engage = lambda x: (bl.smooth_dead_zone(x, half, width),
-                                      bl.smooth_contact(x, half, width))
-        else:
-            self._engage = None
+            self.gap = np.asarray(backlash.gap, dtype=float)
+            self.width = backlash.contact_rounding * self.gap + 1e-12
+            self._dead_zone = bl.smooth_dead_zone
+            self._contact = bl.smooth_contact
         self.elasto = plan.has_backlash
         self.any_elasto = bool(np.any(plan.has_backlash))
         self.all_elasto = bool(np.all(plan.has_backlash))
@@ -228,69 +234,79 @@ class _Kernel:
             self.sigma_f = self.sigma * self.fmask
         self.c = plan.damping
         self.any_damping = bool(np.any(self.c > 0))
-        self.dg_floor = 1e-6 / (cs + cm)
+        self.dg_floor = 1e-6 * self.k0
 
-    def spring(self, x):
-        """(spring torque u, tangent K_t·κ, contact κ) at twist x across the dead zone."""
-        if self._engage is None:
-            u, k = self._spring(x)
-            return u, k, 1.0
-        engaged, contact = self._engage(x)
-        u, k = self._spring(engaged)
-        return u, k * contact, contact
-
-    def dahl(self, z0, dx):
-        """Exact Dahl update over the twist increment ``dx`` (fixed sign) and dz/dx."""
+    def dahl(self, z0, de):
+        """Exact Dahl update over the body-twist increment ``de`` (fixed sign) and dz/de."""
         if not self.friction:
             return z0, 0.0
-        direction = np.copysign(1.0, dx)
+        direction = np.copysign(1.0, de)
         target = direction * self.F
-        z = (target - (target - z0) * np.exp(-self.sigma_over_F * np.abs(dx))) * self.fmask
+        z = (target - (target - z0) * np.exp(-self.sigma_over_F * np.abs(de))) * self.fmask
         dz = self.sigma_f * (1.0 - direction * z / self.F)
         return z, dz
 
-    def rate_coefficients(self, k, contact, z0, dT, h):
+    def rate_coefficients(self, k, z0, dT, h):
         """(c β / h, γ ΔT) of the fitted rate for a step of length h (see the class doc).
 
-        ``k`` and ``contact`` are the spring tangent and contact factor at the start of
-        the step (from the previous step's last Newton evaluation).
+        ``k`` is the spring tangent at the start of the step (from the previous step's
+        last Newton evaluation).
         """
         if not self.any_damping or not np.isfinite(h):
             return None
         if self.friction:
             direction = np.where(dT >= 0.0, 1.0, -1.0)
             k = k + self.fmask * self.sigma * np.maximum(1.0 - direction * z0 / self.F, 0.0)
-        mu = k * h / (self.c * contact + 1e-300)  # c = 0: μ ≈ ∞, β = γ = 0
+        mu = k * h / (self.c + 1e-300)  # c = 0: μ ≈ ∞, β = γ = 0
         beta, gamma = _phi_functions(mu)
         return self.c * beta / h, gamma * dT
 
-    def balance(self, x, x0, z0, torque, rate):
-        """(residual Φ + z − T, its derivative in x, spring tangent, contact)."""
-        u, k, contact = self.spring(x)
-        if rate is not None:
-            cb, gdT = rate
-            d = contact * (cb * (x - x0) + gdT)
-            dd = contact * cb
-            if self.any_elasto:
-                limit = np.maximum(np.abs(u), 1e-300)
-                a = np.clip(d / limit, -40.0, 40.0)
-                th = np.tanh(a)
-                sech2 = 1.0 - th * th
-                phi_e = u + limit * th
-                du_e = 1.0 + np.sign(u) * (th - a * sech2)
-                if self.all_elasto:
-                    phi, dphi = phi_e, du_e * k + sech2 * dd
-                else:
-                    phi = np.where(self.elasto, phi_e, u + d)
-                    dphi = np.where(self.elasto, du_e * k + sech2 * dd, k + dd)
-            else:
-                phi, dphi = u + d, k + dd
-        else:
-            phi, dphi = u, k
+    def balance(self, e, e0, z0, torque, rate):
+        """(residual Φ + z − T, its derivative in e, spring tangent)."""
+        u, k = self._spring(e)
         if self.friction:
-            z, dz = self.dahl(z0, x - x0)
-            return phi + z - torque, dphi + dz, k, contact
-        return phi - torque, dphi, k, contact
+            z, dz = self.dahl(z0, e - e0)
+            u, k_body = u + z, k + dz
+        else:
+            k_body = k
+        if rate is None:
+            return u - torque, k_body, k
+        cb, gdT = rate
+        d = cb * (e - e0) + gdT
+        if not self.any_elasto:
+            return u + d - torque, k_body + cb, k
+        # the ElastoBacklash contact rule on the body's elastic torque: damping never pulls
+        limit = np.maximum(np.abs(u), 1e-300)
+        a = np.clip(d / limit, -40.0, 40.0)
+        th = np.tanh(a)
+        sech2 = 1.0 - th * th
+        phi = u + limit * th
+        dphi = (1.0 + np.sign(u) * (th - a * sech2)) * k_body + sech2 * cb
+        if not self.all_elasto:
+            phi = np.where(self.elasto, phi, u + d)
+            dphi = np.where(self.elasto, dphi, k_body + cb)
+        return phi - torque, dphi, k
+
+    def output_twist(self, e, z):
+        """Output twist x from body twist e and friction torque z (rows, steps).
+
+        Inverts ``e = engage(x − s) + s`` with ``s = −z/K₀`` (`hdsim.dynamics.ElasticPath`):
+        ``x = s + dead_zone⁻¹(e − s)``. The rounded dead zone is increasing, convex for
+        positive and concave for negative arguments, so Newton from the in-contact guess
+        ``v ± b/2`` approaches the root from outside without overshoot.
+        """
+        if self.gap is None or not self.any_elasto:
+            return e
+        k0, half, width = self.k0[:, None], 0.5 * self.gap[:, None], self.width[:, None]
+        shift = -z / k0 if self.friction else np.zeros_like(e)
+        v = e - shift
+        y = v + np.sign(v) * half
+        for _ in range(60):
+            step = (self._dead_zone(y, half, width) - v) / self._contact(y, half, width)
+            y = y - step
+            if np.max(np.abs(step)) < 1e-13:
+                break
+        return np.where(self.elasto[:, None], shift + y, e)
 
 
 def locked_twist(models, time, torque, *, grid=None, tol=1e-9, x_tol=1e-8, max_iter=60,
@@ -309,14 +325,15 @@ def locked_twist(models, time, torque, *, grid=None, tol=1e-9, x_tol=1e-8, max_i
         Indices of the samples to step on (sorted, first 0, last n-1); the twist at other
         samples is interpolated linearly in time. Default: every sample. An int (a step
         budget) or ``"auto"`` (4000) chooses the grid by :func:`sample_grid`, dense where
-        the spring torque can cross zero (``|T| < 0.04·max|T| + 1.25·F`` with ``F`` the
-        largest Dahl friction torque of the batch).
+        the torque is small (``|T| < 0.04·max|T| + 1.25·F`` with ``F`` the largest Dahl
+        friction torque of the batch: the gap is crossed at zero torque and the friction
+        state turns over within ``±F`` of it).
     tol : float
         Torque-balance tolerance relative to ``max |T|``.
     x_tol : float
         A Newton step smaller than this [rad] ends the iteration. Newton converges
-        quadratically, so the error left is about ``x_tol² · g''/g'``: below 1e-11 rad
-        even at the sharpest corner of the dead zone (rounding width ~ 3e-5 rad).
+        quadratically, so the error left is about ``x_tol² · g''/g'``, far below the
+        encoder resolution.
     max_iter : int
         Newton iterations per step at most.
     return_states : bool
@@ -337,8 +354,6 @@ def _locked_twist(plan, time, torque, grid, tol, x_tol, max_iter, return_states)
     t = np.asarray(time, dtype=float)
     T = np.asarray(torque, dtype=float)
     if isinstance(grid, str) or (isinstance(grid, (int, np.integer)) and not isinstance(grid, bool)):
-        # "auto" or a step budget: dense where the spring torque can cross zero, which
-        # with parallel friction is anywhere within |T| < F_max, not only at T = 0
         budget = 4000 if isinstance(grid, str) else int(grid)
         f_max = 0.0
         if plan.friction.id == "dahl":
@@ -350,27 +365,24 @@ def _locked_twist(plan, time, torque, grid, tol, x_tol, max_iter, return_states)
     kern = _Kernel(plan)
     M = plan.size
     tol_T = tol * max(float(np.max(np.abs(T))), 1e-12)
-    x_out = np.empty((M, idx.size))
-    z_out = np.empty((M, idx.size)) if return_states else None
-    k0 = 1.0 / (plan.c_struct + plan.c_mesh)
+    e_out = np.empty((M, idx.size))
+    z_out = np.empty((M, idx.size))
+    k0 = kern.k0
     zeros = np.zeros(M)
-    x, z, k, contact = _solve(kern, Tg[0] / k0, zeros, zeros, Tg[0], None, tol_T, x_tol,
-                              max_iter, np.abs(Tg[0]) / k0)
-    x_out[:, 0] = x
-    if return_states:
-        z_out[:, 0] = z
-    x_prev, h_prev = x, None
+    e, z, k = _solve(kern, Tg[0] / k0, zeros, zeros, Tg[0], None, tol_T, x_tol,
+                     max_iter, np.abs(Tg[0]) / k0)
+    e_out[:, 0], z_out[:, 0] = e, z
+    e_prev, h_prev = e, None
     for j in range(1, idx.size):
         h = tg[j] - tg[j - 1]
         dT = Tg[j] - Tg[j - 1]
-        guess = x + dT / k0 if h_prev is None else x + (x - x_prev) * (h / h_prev)
-        rate = kern.rate_coefficients(k, contact, z, dT, h)
-        x_new, z, k, contact = _solve(kern, guess, x, z, Tg[j], rate, tol_T, x_tol, max_iter,
-                                      np.abs(dT) / k0)
-        x_prev, x, h_prev = x, x_new, h
-        x_out[:, j] = x
-        if return_states:
-            z_out[:, j] = z
+        guess = e + dT / k0 if h_prev is None else e + (e - e_prev) * (h / h_prev)
+        rate = kern.rate_coefficients(k, z, dT, h)
+        e_new, z, k = _solve(kern, guess, e, z, Tg[j], rate, tol_T, x_tol, max_iter,
+                             np.abs(dT) / k0)
+        e_prev, e, h_prev = e, e_new, h
+        e_out[:, j], z_out[:, j] = e, z
+    x_out = kern.output_twist(e_out, z_out)
     if idx.size != t.size:
         x_out = _interp_rows(t, tg, x_out)
         if return_states:
@@ -378,24 +390,24 @@ def _locked_twist(plan, time, torque, grid, tol, x_tol, max_iter, return_states)
     return (x_out, z_out) if return_states else x_out
 
 
-def _solve(kern, guess, x0, z0, torque, rate, tol_T, x_tol, max_iter, x_scale):
-    """Newton on the monotone balance of one step: (x, friction state, tangent, contact).
+def _solve(kern, guess, e0, z0, torque, rate, tol_T, x_tol, max_iter, x_scale):
+    """Newton on the monotone balance of one step: (body twist, friction state, tangent).
 
     Plain Newton steps first; if they have not converged after three, the iteration
-    keeps a bracket (the balance is increasing in x) and bisects when a Newton step
+    keeps a bracket (the balance is increasing in e) and bisects when a Newton step
     leaves it, with unbracketed steps limited to a few expected increments.
     """
     x = guess
     lo = hi = None
     for it in range(max_iter):
-        g, dg, k, contact = kern.balance(x, x0, z0, torque, rate)
-        # the balance is increasing in x but may be flat (an open contact rule): floor dg
+        g, dg, k = kern.balance(x, e0, z0, torque, rate)
+        # the balance is increasing in e but may be flat (an opening contact): floor dg
         step = -g / np.maximum(dg, kern.dg_floor)
         if it >= 3:
             if lo is None:
                 lo = np.full_like(x, -np.inf)
                 hi = np.full_like(x, np.inf)
-                base = np.abs(x - x0) + x_scale + 1e-8
+                base = np.abs(x - e0) + x_scale + 1e-8
             lo = np.where(g < 0.0, np.maximum(lo, x), lo)
             hi = np.where(g > 0.0, np.minimum(hi, x), hi)
             limit = 4.0 * base
@@ -410,8 +422,8 @@ def _solve(kern, guess, x0, z0, torque, rate, tol_T, x_tol, max_iter, x_scale):
         x = x + step
         if np.abs(step).max() <= x_tol:
             break
-    z = kern.dahl(z0, x - x0)[0] if kern.friction else z0
-    return x, z, k, contact
+    z = kern.dahl(z0, x - e0)[0] if kern.friction else z0
+    return x, z, k
 
 
 def _interp_rows(t, tg, values):

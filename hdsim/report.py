@@ -209,14 +209,16 @@ def _rounds(diagnosis):
         lines = []
         for c in sorted(step.candidates, key=lambda c: c.score):
             lines.append([c.family, c.effect, f"{c.score:.1f}", f"{c.fit.rmse_rad * arcsec:.2f}",
-                          ", ".join(f"{100 * g:.0f} %" for g in c.holdout_gain), c.reason])
+                          f"{100 * c.pooled_holdout_gain:.0f} % ("
+                          + ", ".join(f"{100 * g:.0f} %" for g in c.holdout_gain) + ")", c.reason])
         out.append((i + 1, "+".join(step.effects) or "base", lines))
     return out
 
 
 TABLE_HEAD = ["step", "effects", "added", "rms [arcsec]", "max [arcsec]", "hold-out rms [arcsec]",
               "score"]
-ROUND_HEAD = ["family", "effect", "score", "rms [arcsec]", "hold-out gain", "decision"]
+ROUND_HEAD = ["family", "effect", "score", "rms [arcsec]", "hold-out gain, pooled (per fold)",
+              "decision"]
 
 
 def _md_table(head, rows):

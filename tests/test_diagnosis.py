@@ -142,16 +142,21 @@ def _battery_case(kind, family, seed):
 @pytest.mark.parametrize("kind", ["companion", "full"])
 @pytest.mark.parametrize("family", FAMILIES)
 def test_battery_each_family_hidden(kind, family):
-    """Ranked first and added first in ≥ 90 %, error after adding ≤ half (companion runs)."""
+    """Ranked first and added first in ≥ 90 %, error after adding ≤ half in ≥ 90 %."""
     first = halved = 0
     for seed in SEEDS:
         meas, base = _battery_case(kind, family, seed)
         j = diagnose(meas, base).to_json()
         first += j["ranking"][0]["family"] == family and j["added"][:1] == [family]
         halved += j["final"]["rmse_rad"] <= 0.5 * j["baseline"]["rmse_rad"]
-    assert first / len(SEEDS) >= 0.9 if kind == "companion" else first / len(SEEDS) >= 0.6
-    if kind == "companion":
-        assert halved / len(SEEDS) >= 0.9
+    assert first / len(SEEDS) >= 0.9
+    if kind == "full" and family == "backlash" and halved / len(SEEDS) < 0.9:
+        # Known gap (validation/diagnosis_battery.py): with hardening and damping both in
+        # the truth, its stiffness-proportional damping leaves a ~1e-5 rad floor that the
+        # library's constant viscous coefficient cannot fit; a small hidden gap
+        # (0.3 arcmin) has a baseline error of only ~2e-5 rad, so it cannot be halved.
+        pytest.xfail(f"full baseline, backlash hidden: error halved in {halved}/{len(SEEDS)}")
+    assert halved / len(SEEDS) >= 0.9
 
 
 @pytest.mark.slow
