@@ -38,8 +38,9 @@ Whiteness of the final residual (:func:`hdsim.residuals.whiteness`) decides the 
 a residual that is neither white nor at the noise floor means the model still misses
 something (a form the library lacks, or an effect outside it) and no success is claimed.
 
-The acceptance rule was set on the battery of ``tests/test_diagnosis.py`` (truth data
-from ``tests/truth.py``, forms unlike the library's): its rates are in the tutorial
+The acceptance rule was set on the battery ``validation/diagnosis_battery.py`` (truth
+data from ``tests/truth.py``, forms unlike the library's; the slow tests of
+``tests/test_diagnosis.py`` run a part of it): its rates are in the tutorial
 ``docs/tutorial-find-missing-effect.md``.
 """
 
