@@ -266,8 +266,8 @@ class DahlFriction(NoFriction):
     sigma: float = param("initial (sticking) stiffness", "N·m/rad", positive=True)
 
     def body_slope(self, state, body_rate):
-        """dz/de = σ (1 − z/F · sgn ė) [N·m/rad] of `physics.friction.dahl_rate`, floored at 0."""
-        return np.maximum(self.sigma * (1.0 - state / self.torque_max * np.sign(body_rate)), 0.0)
+        """dz/de [N·m/rad]: Dahl's slope for the direction of the body's motion."""
+        return fr.dahl_slope(state, np.sign(body_rate), self.sigma, self.torque_max)
 
 
 @dataclass(frozen=True, eq=False)

@@ -61,6 +61,9 @@ import numpy as np
 from hdsim import effects as fx
 from hdsim.errors import InputError
 from hdsim.model import HarmonicDrive
+from hdsim.physics import backlash as bl
+from hdsim.physics import friction as fr
+from hdsim.physics import stiffness as st
 
 __all__ = ["SUPPORTED", "UnsupportedEffect", "Plan", "stack_models", "locked_twist",
            "dynamic_locked_twist", "sample_grid", "supports"]
@@ -193,9 +196,6 @@ class _Kernel:
     """
 
     def __init__(self, plan: Plan):
-        from hdsim.physics import backlash as bl
-        from hdsim.physics import stiffness as st
-
         self.plan = plan
         cs, cm = plan.c_struct, plan.c_mesh
         self.k0 = 1.0 / (cs + cm)  # every supported hardening law starts from K0
@@ -220,8 +220,6 @@ class _Kernel:
         if backlash.id == "dead_zone":
             self.gap = np.asarray(backlash.gap, dtype=float)
             self.width = backlash.contact_rounding * self.gap + 1e-12
-            self._dead_zone = bl.smooth_dead_zone
-            self._contact = bl.smooth_contact
         self.elasto = plan.has_backlash
         self.any_elasto = bool(np.any(plan.has_backlash))
         self.all_elasto = bool(np.all(plan.has_backlash))
@@ -231,7 +229,7 @@ class _Kernel:
             self.sigma = np.asarray(plan.friction.sigma, dtype=float)
             self.fmask = plan.has_friction
             self.sigma_over_F = self.sigma / self.F
-            self.sigma_f = self.sigma * self.fmask
+            self.sigma_f = self.sigma * self.fmask  # zero slope where the row has no friction
         self.c = plan.damping
         self.any_damping = bool(np.any(self.c > 0))
         self.dg_floor = 1e-6 * self.k0
@@ -243,8 +241,7 @@ class _Kernel:
         direction = np.copysign(1.0, de)
         target = direction * self.F
         z = (target - (target - z0) * np.exp(-self.sigma_over_F * np.abs(de))) * self.fmask
-        dz = self.sigma_f * (1.0 - direction * z / self.F)
-        return z, dz
+        return z, fr.dahl_slope(z, direction, self.sigma_f, self.F)
 
     def rate_coefficients(self, k, z0, dT, h):
         """(c β / h, γ ΔT) of the fitted rate for a step of length h (see the class doc).
@@ -256,7 +253,7 @@ class _Kernel:
             return None
         if self.friction:
             direction = np.where(dT >= 0.0, 1.0, -1.0)
-            k = k + self.fmask * self.sigma * np.maximum(1.0 - direction * z0 / self.F, 0.0)
+            k = k + fr.dahl_slope(z0, direction, self.sigma_f, self.F)
         mu = k * h / (self.c + 1e-300)  # c = 0: μ ≈ ∞, β = γ = 0
         beta, gamma = _phi_functions(mu)
         return self.c * beta / h, gamma * dT
@@ -295,19 +292,19 @@ class _Kernel:
         positive and concave for negative arguments, so Newton from the in-contact guess
         ``v ± b/2`` approaches the root from outside without overshoot.
         """
-        if self.gap is None or not self.any_elasto:
+        if self.gap is None:  # a dead-zone carrier means at least one row has backlash
             return e
-        k0, half, width = self.k0[:, None], 0.5 * self.gap[:, None], self.width[:, None]
-        shift = -z / k0 if self.friction else np.zeros_like(e)
+        shift = -z / self.k0[:, None] if self.friction else np.zeros_like(e)
         v = e - shift
+        half = np.broadcast_to(0.5 * self.gap[:, None], v.shape)
+        width = np.broadcast_to(self.width[:, None], v.shape)
         y = v + np.sign(v) * half
         # far in contact the rounding is below 1e-13·width: Newton only near the gap
-        near = self.elasto[:, None] & (np.abs(v) < 40.0 * np.broadcast_to(width, v.shape))
+        near = self.elasto[:, None] & (np.abs(v) < 40.0 * width)
         if np.any(near):
-            vn, yn = v[near], y[near]
-            hn, wn = np.broadcast_to(half, v.shape)[near], np.broadcast_to(width, v.shape)[near]
+            vn, yn, hn, wn = v[near], y[near], half[near], width[near]
             for _ in range(60):
-                step = (self._dead_zone(yn, hn, wn) - vn) / self._contact(yn, hn, wn)
+                step = (bl.smooth_dead_zone(yn, hn, wn) - vn) / bl.smooth_contact(yn, hn, wn)
                 yn = yn - step
                 if np.max(np.abs(step)) < 1e-13:
                     break

@@ -16,13 +16,22 @@ def stribeck(velocity, coulomb_torque, static_torque, stribeck_velocity, viscous
     return level * np.tanh(velocity / velocity_scale) + viscous * velocity
 
 
+def dahl_slope(state, direction, stiffness, saturation):
+    """Dahl model slope ``dz/dx = σ (1 − z/z_max · d)``, floored at 0 (Dahl, 1968).
+
+    ``direction`` is the sign of the motion, ``d = sgn ẋ``, or a smooth stand-in for it
+    in [−1, 1]. The floor only acts on a state pushed past saturation by round-off.
+    """
+    return stiffness * np.maximum(1.0 - state / saturation * direction, 0.0)
+
+
 def dahl_rate(state, velocity, stiffness, saturation):
     """Dahl model rate ``ż = σ (1 − z/z_max · sgn v) v`` (Dahl, 1968).
 
     Used in torque form (z a torque, σ [N·m/rad]) and in compliance form (z a twist,
     σ = 1/k [rad/(N·m)] driven by a torque rate); the law is the same.
     """
-    return stiffness * (1.0 - state / saturation * np.sign(velocity)) * velocity
+    return dahl_slope(state, np.sign(velocity), stiffness, saturation) * velocity
 
 
 def dahl_slip_rates(slips, twist_rate, elastic_tangent, elastic_torque, slip_torques, slip_maxes,
@@ -46,7 +55,7 @@ def dahl_slip_rates(slips, twist_rate, elastic_tangent, elastic_torque, slip_tor
     stop_torque = stiffnesses * smooth_dead_zone(slips, slip_maxes, stop_width)
     friction_torque = elastic_torque - stop_torque
     direction = np.tanh(twist_rate / velocity_scale)
-    stick = stiffnesses * np.maximum(1.0 - friction_torque / slip_torques * direction, 0.0)
+    stick = dahl_slope(friction_torque, direction, stiffnesses, slip_torques)
     D = stick + stiffnesses * smooth_contact(slips, slip_maxes, stop_width)
     # compliances, floored so a free slider is very compliant rather than infinitely so
     slider_compliance = 1.0 / np.maximum(D, 1e-9 * stiffnesses)
