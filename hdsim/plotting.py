@@ -62,10 +62,10 @@ def plot_time(run, sample: int = 0):
     return fig
 
 
-def save(fig, path) -> None:
-    """Save a figure atomically and close it."""
+def save(fig, path, dpi: int = 120, **savefig_options) -> None:
+    """Save a figure atomically (format from the suffix) and close it."""
     from hdsim.atomic import atomic_path
 
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=120, format=str(path).rsplit(".", 1)[-1])
+        fig.savefig(tmp, dpi=dpi, format=str(path).rsplit(".", 1)[-1], **savefig_options)
     plt.close(fig)

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hdsim.atomic import atomic_path, write_text_atomic
+from hdsim.atomic import write_text_atomic
 from hdsim.residuals import order_spectrum, views
 from hdsim.units import ARCSEC_PER_RAD
 
@@ -45,9 +45,9 @@ def _plt():
 
 
 def _save(fig, path: Path) -> None:
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=110, bbox_inches="tight")
-    _plt().close(fig)
+    from hdsim.plotting import save
+
+    save(fig, path, dpi=110, bbox_inches="tight")
 
 
 def _label(step) -> str:

@@ -61,10 +61,6 @@ def from_import(spec, names, output=None, range_frac=None, bounds=None, dists=No
 
 
 def _batch():
-    try:
-        return importlib.import_module("hdsim.batch")
-    except ModuleNotFoundError as exc:
-        if exc.name != "hdsim.batch":
-            raise
-        raise RuntimeError("--unit studies need hdsim.batch (the simulator's batch "
-                           "interface), which is not in this installation") from None
+    """The simulator's batch interface, imported only for --unit studies (it loads scipy
+    solvers and the unit catalog, which analytic-function studies do not need)."""
+    return importlib.import_module("hdsim.batch")
