@@ -611,11 +611,11 @@ def driven_wave_generator(model: HarmonicDrive, motion: Motion, load: Load = NO_
                                                                "deviation_rate")
     extra = ("speed_error_integral",) if mode == "pi" else ()
     energy = ("work_motor", "work_load", "work_ke") if track_energy else ()
-    names = mech + extra + path.friction_states + energy
+    names = mech + extra + path.states + energy
     n = len(names)
     iq = 0 if prescribed else 2
     i_fric = len(mech) + len(extra)
-    n_fric = len(path.friction_states)
+    n_fric = len(path.states)
     i_work = i_fric + n_fric
 
     def core(t, x):

@@ -15,7 +15,7 @@ linear algebra O(M).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, ClassVar
 
 import numpy as np
 from scipy import sparse
@@ -25,32 +25,68 @@ from hdsim.model import HarmonicDrive
 
 @dataclass(frozen=True)
 class ElasticPath:
-    """Torque through the drive as a function of output-side twist, rate and friction states."""
+    """Torque through the drive as a function of output-side twist, rate and path states.
+
+    Two arrangements of the dead zone (docs/physics.md §7):
+
+    * **ElastoBacklash** (series or parallel friction effects): the spring and damper sit
+      behind the dead zone as in Modelica's ElastoBacklash; the body has no state of its
+      own and the contact rule keeps the damping from pulling.
+    * **Body in series with the dead zone** (body friction, or no friction): the body
+      (spring ∥ damper ∥ Dahl friction) carries the torque the dead zone transmits. With a
+      damper the body twist lags and keeps relaxing while the output crosses the gap, so
+      the body needs a state; it is ``backlash.closure`` (:meth:`_evaluate_series_body`).
+    """
 
     model: HarmonicDrive
+    #: contact compliance of the dead zone in the body-state form, as a share of 1/K₀:
+    #: it keeps the closure state's equation regular in contact (time constant c·ε/K₀)
+    #: and adds ε·T/K₀ of twist, 3e-8 rad at rated torque, far below encoder resolution
+    contact_compliance_share: ClassVar[float] = 1e-5
 
     def __post_init__(self):
-        c_struct, c_mesh = self.model.split()
+        model = self.model
+        c_struct, c_mesh = model.split()
         object.__setattr__(self, "c_struct", c_struct)
         object.__setattr__(self, "c_mesh", c_mesh)
         # stiffness at zero twist: the body's rest twist in the gap is −z/K₀
-        object.__setattr__(self, "base_tangent",
-                           self.model.hardening.tangent(0.0, c_struct, c_mesh))
+        object.__setattr__(self, "base_tangent", model.hardening.tangent(0.0, c_struct, c_mesh))
+        object.__setattr__(self, "load_dependent_damping",
+                           model.damping.id != "none" and bool(np.any(np.asarray(model.damping.stiffness_share) != 0)))
+        object.__setattr__(self, "series_body", model.friction.kind in ("body", "none")
+                           and model.backlash.id != "none" and model.damping.id != "none")
 
     @property
-    def friction_states(self) -> tuple[str, ...]:
-        return tuple(f"friction.{name}" for name in self.model.friction.state_names)
+    def states(self) -> tuple[str, ...]:
+        """Names of the path's ODE states (friction memory, then the dead-zone closure)."""
+        names = tuple(f"friction.{name}" for name in self.model.friction.state_names)
+        return names + (("backlash.closure",) if self.series_body else ())
+
+    @property
+    def state_units(self) -> tuple[str, ...]:
+        """Unit of each of :attr:`states`, "rad" or "N·m" (sets the solver's tolerances)."""
+        units = (self.model.friction.state_unit,) * len(self.model.friction.state_names)
+        return units + (("rad",) if self.series_body else ())
 
     def spring(self, twist):
         return self.model.hardening.torque(twist, self.c_struct, self.c_mesh)
 
-    def evaluate(self, twist, twist_rate, friction_states):
-        """(torque [N·m], friction state rates, hysteretic twist [rad])."""
+    def damping_coefficient(self, twist):
+        """Damping coefficient [N·m·s/rad] of the body at spring twist ``twist``."""
+        if not self.load_dependent_damping:
+            return self.model.damping.coefficient
+        ratio = self.model.hardening.tangent(twist, self.c_struct, self.c_mesh) / self.base_tangent
+        return self.model.damping.coefficient_at(ratio)
+
+    def evaluate(self, twist, twist_rate, states):
+        """(torque [N·m], state rates, hysteretic twist [rad])."""
         model = self.model
         friction = model.friction
+        if self.series_body:
+            return self._evaluate_series_body(twist, twist_rate, states)
         if friction.kind == "body":
-            return self._evaluate_body(twist, twist_rate, friction_states)
-        hysteretic = friction.series_twist(friction_states) if friction.kind == "series" else 0.0
+            return self._evaluate_body(twist, twist_rate, states)
+        hysteretic = friction.series_twist(states) if friction.kind == "series" else 0.0
         elastic_twist = twist - hysteretic
         engaged, contact = model.backlash.engage(elastic_twist)
         spring_torque = self.spring(engaged)
@@ -58,17 +94,17 @@ class ElasticPath:
         rates: tuple = ()
         if friction.kind == "series":
             tangent = model.hardening.tangent(engaged, self.c_struct, self.c_mesh) * contact
-            rates = friction.series_rates(friction_states, twist_rate, tangent, spring_torque)
+            rates = friction.series_rates(states, twist_rate, tangent, spring_torque)
             elastic_rate = twist_rate - sum(rates)
-        damping_torque = model.damping.coefficient * elastic_rate * contact
+        damping_torque = self.damping_coefficient(engaged) * elastic_rate * contact
         torque = model.backlash.contact_torque(spring_torque, damping_torque)
         if friction.kind == "parallel":
-            torque = torque + friction.parallel_torque(friction_states, twist_rate)
-            rates = friction.parallel_rates(friction_states, twist_rate)
+            torque = torque + friction.parallel_torque(states, twist_rate)
+            rates = friction.parallel_rates(states, twist_rate)
         return torque, rates, hysteretic
 
     def _evaluate_body(self, twist, twist_rate, friction_states):
-        """Friction z in the body (spring ∥ damper ∥ friction) behind the dead zone.
+        """Dahl friction z in the body behind the dead zone, without a damper behind it.
 
         The body twist is ``e = engage(x − s) + s`` with the shift ``s = −z/K₀``: in
         contact the dead zone takes its half gap (``e = x ∓ b/2``), and in the gap the
@@ -76,7 +112,7 @@ class ElasticPath:
         nothing is transmitted. Differentiating, with ``ż = D ė`` and ``D`` the Dahl
         slope, gives ``ė = κ ẋ / (1 + (1 − κ) D/K₀)``: the body follows the output in
         contact (κ = 1) and stands still in the gap (κ = 0). Without backlash ``e = x``
-        and the torque is ``u(x) + z + c ẋ``.
+        and the torque is ``u(x) + z + c(x) ẋ``.
         """
         model = self.model
         z = friction_states[0]
@@ -84,10 +120,36 @@ class ElasticPath:
         engaged, contact = model.backlash.engage(twist - shift)
         slope = model.friction.body_slope(z, twist_rate)
         body_rate = contact * twist_rate / (1.0 + (1.0 - contact) * slope / self.base_tangent)
-        elastic_torque = self.spring(engaged + shift) + z
-        damping_torque = model.damping.coefficient * body_rate
-        torque = model.backlash.contact_torque(elastic_torque, damping_torque)
+        torque = self.spring(engaged + shift) + z + self.damping_coefficient(engaged + shift) * body_rate
         return torque, (slope * body_rate,), 0.0
+
+    def _evaluate_series_body(self, twist, twist_rate, states):
+        """Body (spring ∥ damper ∥ optional Dahl) in series with the dead zone, state ``v``.
+
+        The dead zone transmits ``T = K₀·dz(v)``, with ``dz`` the rounded dead zone and
+        ``v`` the closure state, and takes the angle ``g = v − (1 − ε)·dz(v)``, an
+        increasing function of ``T`` (``ε``: :attr:`contact_compliance_share`). The body
+        twist is ``e = x − g`` and obeys its own balance, ``c(e) ė = T − u(e) − z``: in
+        contact it follows the output, in the gap (``T = 0``) it relaxes on its own. From
+        ``ẋ = ė + g'(v) v̇``, ``v̇ = (ẋ − ė)/(1 − (1 − ε) κ)``. Quasi-statically the output
+        twist is ``e + dz⁻¹(T/K₀) − T/K₀``, as in :mod:`hdsim.quasistatic`.
+        """
+        model = self.model
+        v = states[-1]
+        closed, contact = model.backlash.engage(v)
+        torque = self.base_tangent * closed
+        body = twist - (v - (1.0 - self.contact_compliance_share) * closed)
+        # a zero coefficient in a batch: relax within a microsecond instead of dividing by 0
+        c = np.maximum(self.damping_coefficient(body), 1e-6 * self.base_tangent)
+        if model.friction.kind == "body":
+            z = states[0]
+            body_rate = (torque - self.spring(body) - z) / c
+            rates = (model.friction.body_slope(z, body_rate) * body_rate,)
+        else:
+            body_rate = (torque - self.spring(body)) / c
+            rates = ()
+        closure_rate = (twist_rate - body_rate) / (1.0 - (1.0 - self.contact_compliance_share) * contact)
+        return torque, rates + (closure_rate,), 0.0
 
 
 @dataclass
@@ -142,7 +204,7 @@ def locked_wave_generator(model: HarmonicDrive, torque: Callable) -> ODESystem:
     """
     path = ElasticPath(model)
     M = model.batch_size
-    names = ("theta_out", "omega_out") + path.friction_states
+    names = ("theta_out", "omega_out") + path.states
     n = len(names)
     J = np.asarray(model.drive.J_out, dtype=float)
 
@@ -160,7 +222,7 @@ def locked_wave_generator(model: HarmonicDrive, torque: Callable) -> ODESystem:
     def outputs(t, states):
         # evaluate with time first, (nt, M), so per-sample parameters (M,) broadcast
         theta, omega = states["theta_out"].T, states["omega_out"].T
-        fstates = np.array([states[s].T for s in path.friction_states]).reshape(-1, *theta.shape)
+        fstates = np.array([states[s].T for s in path.states]).reshape(-1, *theta.shape)
         tau, _, hysteretic = path.evaluate(theta, omega, fstates)
         applied = np.broadcast_to(torque(t[:, None]), theta.shape)  # profiles are vectorised in t
         signals = {"torque_Nm": applied, "twist_rad": theta, "drive_torque_Nm": tau,
@@ -170,6 +232,6 @@ def locked_wave_generator(model: HarmonicDrive, torque: Callable) -> ODESystem:
     torque_scale = np.max(np.asarray(model.drive.rated_torque)) * 1e-2
     theta_scale = np.max(torque_scale / np.asarray(model.base_stiffness))
     omega_scale = theta_scale * np.max(np.sqrt(np.asarray(model.base_stiffness) / J))
-    friction_scale = torque_scale if model.friction.state_unit == "N·m" else theta_scale
-    scales = np.array([theta_scale, omega_scale] + [friction_scale] * len(path.friction_states))
+    path_scales = [torque_scale if unit == "N·m" else theta_scale for unit in path.state_units]
+    scales = np.array([theta_scale, omega_scale] + path_scales)
     return ODESystem("locked_wave_generator", names, M, rhs, np.zeros(n * M), outputs, scales)

@@ -17,21 +17,27 @@ Everything here is in SI: torque [N·m], twist [rad], time [s].
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from dataclasses import MISSING, dataclass, field, fields
 from typing import ClassVar
 
 import numpy as np
 
 from hdsim.errors import InputError, unknown_name
 from hdsim.physics import backlash as bl
+from hdsim.physics import damping as dp
 from hdsim.physics import friction as fr
 from hdsim.physics import kinematic_error as ke
 from hdsim.physics import stiffness as st
 
 
-def param(doc: str, unit: str, lower: float = 0.0, upper: float = np.inf, positive: bool = False):
-    """A numeric effect parameter with its unit and physical bounds (for fits and checks)."""
-    return field(metadata={"doc": doc, "unit": unit, "bounds": (lower, upper), "positive": positive})
+def param(doc: str, unit: str, lower: float = 0.0, upper: float = np.inf, positive: bool = False,
+          default=MISSING):
+    """A numeric effect parameter with its unit and physical bounds (for fits and checks).
+
+    A ``default`` makes the parameter optional in scenario and fitted-model files.
+    """
+    return field(default=default,
+                 metadata={"doc": doc, "unit": unit, "bounds": (lower, upper), "positive": positive})
 
 
 class Parameters:
@@ -167,10 +173,11 @@ class NoBacklash(Effect):
 class DeadZoneBacklash(Effect):
     """Dead zone of total width ``gap`` seen at the output (seed paper eq. 2, b = 2 b_s).
 
-    The corners are rounded over ``contact_rounding·gap`` and contact follows a smooth
-    form of the Modelica ElastoBacklash law (the damping never pulls, torque is
-    continuous at contact onset), so an implicit solver crosses the gap without
-    chattering.
+    The corners are rounded over ``contact_rounding·gap``, so an implicit solver crosses
+    the gap without chattering. With series or parallel friction the contact follows a
+    smooth form of the Modelica ElastoBacklash law (the damping never pulls, torque is
+    continuous at contact onset); with body friction or none, a damped body sits in
+    series with the dead zone and keeps its own twist (`hdsim.dynamics.ElasticPath`).
     """
 
     family: ClassVar[str] = "backlash"
@@ -327,15 +334,32 @@ class NoDamping(Effect):
     family: ClassVar[str] = "damping"
     id: ClassVar[str] = "none"
     coefficient = 0.0
+    stiffness_share = 0.0
+
+    def coefficient_at(self, tangent_ratio):
+        return 0.0
 
 
 @dataclass(frozen=True, eq=False)
 class ViscousDamping(Effect):
-    """Viscous (Kelvin-Voigt) damping across the spring, ``τ = c δ̇``."""
+    """Viscous (Kelvin–Voigt) damping across the spring, ``τ = c(δ) δ̇``.
+
+    ``c(δ) = c₀ [(1 − s) + s K_t(δ)/K₀]`` (`hdsim.physics.damping.load_dependent_coefficient`):
+    the share ``s`` of the damping follows the tangent stiffness, as the damping of the
+    tooth contacts does when more teeth come into mesh (stiffness-proportional, Rayleigh
+    damping), the rest (lubricant shear, cylinder material) stays constant. Without
+    hardening, or with ``s = 0``, it is a constant coefficient ``c₀``.
+    """
 
     family: ClassVar[str] = "damping"
     id: ClassVar[str] = "viscous"
-    coefficient: float = param("viscous coefficient", "N·m·s/rad", 0.0, 1e6)
+    coefficient: float = param("viscous coefficient at zero twist", "N·m·s/rad", 0.0, 1e6)
+    stiffness_share: float = param("share of the coefficient proportional to the tangent stiffness",
+                                   "-", 0.0, 1.0, default=0.0)
+
+    def coefficient_at(self, tangent_ratio):
+        """Damping coefficient [N·m·s/rad] where the tangent stiffness is ``tangent_ratio·K₀``."""
+        return dp.load_dependent_coefficient(self.coefficient, self.stiffness_share, tangent_ratio)
 
 
 # --------------------------------------------------------------------------- kinematic error
@@ -401,7 +425,7 @@ def make_effect(family: str, effect_id: str, **values) -> Effect:
     for name in values:
         if name not in known:
             raise unknown_name(f"parameter of {family}.{effect_id}", name, known or {"(none)"})
-    missing = known - set(values)
+    missing = {f.name for f in fields(cls) if f.default is MISSING} - set(values)
     if missing:
         raise InputError(f"{family}.{effect_id} needs {', '.join(sorted(missing))}")
     return cls(**values)

@@ -74,7 +74,8 @@ FREE = {
     ("hardening", "three_segment"): ("T1", "T2", "e2", "e3"),
     ("backlash", "dead_zone"): ("gap",),
     ("friction", "dahl"): ("torque_max", "sigma"),
-    ("damping", "viscous"): ("coefficient",),
+    # the stiffness share only shows with hardening (free_parameters drops it without)
+    ("damping", "viscous"): ("coefficient", "stiffness_share"),
     # amplitudes and phases are solved linearly (sine/cosine pairs); load_gain stays 0
     ("kinematic_error", "fourier"): (),
 }
@@ -157,7 +158,7 @@ def build_model(unit, effects: dict[str, str], meas: Measurement | None = None) 
         ("hardening", "three_segment"): {"T1": 0.15 * T_N, "T2": 0.5 * T_N, "e2": 2.0, "e3": 3.0},
         ("backlash", "dead_zone"): {"gap": 1e-4},
         ("friction", "dahl"): {"torque_max": 0.03 * T_N, "sigma": 2.0 * K},
-        ("damping", "viscous"): {"coefficient": 0.005 * K},
+        ("damping", "viscous"): {"coefficient": 0.005 * K, "stiffness_share": 0.0},
         ("kinematic_error", "fourier"): {"a1": 0.0, "a2": 0.0, "a4": 0.0, "p1": 0.0, "p2": 0.0,
                                          "p4": 0.0, "a_out": 0.0, "p_out": 0.0, "load_gain": 0.0},
     }
@@ -187,9 +188,11 @@ def build_model(unit, effects: dict[str, str], meas: Measurement | None = None) 
 def free_parameters(model: HarmonicDrive) -> list[str]:
     """Internal names of the fitted parameters of ``model`` (K0 first)."""
     names = [K0_NAME]
+    linear = model.hardening.id == "none"
     for family in SLOTS:
         effect = getattr(model, family)
-        names += [f"{family}.{p}" for p in FREE.get((family, effect.id), ())]
+        names += [f"{family}.{p}" for p in FREE.get((family, effect.id), ())
+                  if not (linear and p == "stiffness_share")]  # no effect on a linear spring
     return names
 
 
@@ -749,6 +752,8 @@ def start_values(meas: Measurement, model: HarmonicDrive, names, given: dict | N
             start[name] = float(np.clip(0.5 * K * max(sig["loop_width"], 1e-5), 1e-3 * T_max, 0.5 * T_max))
         elif name == "friction.sigma":
             start[name] = 2.0 * K
+        elif name == "damping.stiffness_share":
+            start[name] = 0.5
         elif name == "damping.coefficient":
             width = max(sig["loop_width"], 2e-5)
             start[name] = float(np.clip(0.5 * width * K * K / (2.0 * max(sig["rate"], 1e-9)), 1e-3, 5e5))

@@ -22,27 +22,30 @@ The same elastic path as :class:`hdsim.dynamics.ElasticPath`, with the library's
 objects and laws (the same :class:`~hdsim.model.HarmonicDrive` slots)::
 
     e            body twist, behind the dead zone (spring ∥ damper ∥ Dahl friction)
-    u            = hardening.torque(e, C_s, C_m) spring torque
+    u            = hardening.torque(e, C_s, C_m) spring torque, K_t = its tangent
     z            Dahl friction torque, dz/de = σ (1 − z/F · sgn ė)
-    d            = c · ė                         viscous damping torque
-    Φ            = backlash.contact_torque(u + z, d)   (u + z + d without backlash)
-    Φ = T(t)                                     the torque balance, inertia dropped
-    x            = s + dead_zone⁻¹(e − s), s = −z/K₀   output twist (= the angle θ)
+    d            = c(e) · ė, c(e) = c₀ [(1 − s) + s K_t/K₀]   viscous damping torque
+    u + z + d = T(t)                             the torque balance, inertia dropped
+    x            = e + g(T), g(T) = dead_zone⁻¹(T/K₀) − T/K₀   output twist (= the angle θ)
+
+The dead zone is in series with the body and carries the same torque, so its angle
+``g`` is a function of the transmitted torque alone (:class:`hdsim.dynamics.ElasticPath`).
 
 Each step from sample ``k`` to ``k+1`` solves the balance at ``t_{k+1}`` for the new
-body twist with an exponentially fitted rate for ``ė``; the Dahl state is advanced
-*exactly* over the twist increment (the law is rate-independent: for a fixed sign of
-``ė``, ``z(e) = s F − (s F − z₀) exp(−σ|Δe|/F)``). The scalar equation per sample is
+body twist with an exponentially fitted rate for ``ė`` (the coefficient ``c(e)`` taken at
+the start of the step); the Dahl state is advanced *exactly* over the twist increment
+(the law is rate-independent: for a fixed sign of ``ė``,
+``z(e) = s F − (s F − z₀) exp(−σ|Δe|/F)``). The scalar equation per sample is
 monotone in the new body twist (the dead zone is not inside it) and is solved by Newton's
 method kept inside a bracket (bisection when a Newton step leaves it), vectorised over a
-batch of parameter sets; the output twist follows in closed form but for one monotone
+batch of parameter sets; the output twist follows from the torque by one monotone
 inversion of the rounded dead zone. Without damping (``c = 0``) the result does not
 depend on the time step at all (rate independence).
 
 A batch may mix *models*: several :class:`HarmonicDrive` objects (each single or a batch)
 are stacked into one plan if, slot by slot, they use one effect class or none. A model
 without a family gets neutral parameters of the carrier class (``gap = 0``,
-``e_inf = 1``, ``c = 0``) or a mask (friction, the backlash contact rule), which reproduce
+``e_inf = 1``, ``c = 0``) or a mask (friction, the dead-zone angle), which reproduce
 "none" exactly. That lets a diagnosis evaluate every candidate model of a round, and their
 finite-difference Jacobian columns, in one pass over the samples.
 
@@ -62,6 +65,7 @@ from hdsim import effects as fx
 from hdsim.errors import InputError
 from hdsim.model import HarmonicDrive
 from hdsim.physics import backlash as bl
+from hdsim.physics import damping as dp
 from hdsim.physics import friction as fr
 from hdsim.physics import stiffness as st
 
@@ -83,7 +87,7 @@ _NEUTRAL = {
     ("hardening", "three_segment"): {"T1": 1.0, "T2": 2.0, "e2": 1.0, "e3": 1.0},
     ("backlash", "dead_zone"): {"gap": 0.0},
     ("friction", "dahl"): {"torque_max": 1.0, "sigma": 1.0},
-    ("damping", "viscous"): {"coefficient": 0.0},
+    ("damping", "viscous"): {"coefficient": 0.0, "stiffness_share": 0.0},
 }
 
 _BODY = ("hardening", "backlash", "friction", "damping")
@@ -107,10 +111,11 @@ class Plan:
     c_mesh: np.ndarray
     hardening: fx.Effect
     backlash: fx.Effect
-    has_backlash: np.ndarray  # (M,) bool: the ElastoBacklash contact rule applies
+    has_backlash: np.ndarray  # (M,) bool: the row has a dead zone
     friction: fx.Effect
     has_friction: np.ndarray  # (M,) float 0/1
-    damping: np.ndarray  # (M,) viscous coefficient [N·m·s/rad], 0 for none
+    damping: np.ndarray  # (M,) viscous coefficient c₀ [N·m·s/rad], 0 for none
+    stiffness_share: np.ndarray  # (M,) share of c₀ proportional to the tangent stiffness
     offsets: tuple[int, ...]  # first row of each stacked model
 
 
@@ -156,13 +161,15 @@ def stack_models(models) -> Plan:
     backlash, has_backlash = _carrier("backlash", models, sizes)
     friction, has_friction = _carrier("friction", models, sizes)
     damping, has_damping = _carrier("damping", models, sizes)
-    coefficient = (np.asarray(damping.coefficient, dtype=float) * has_damping
-                   if damping.id != "none" else np.zeros(sum(sizes)))
+    size = sum(sizes)
+    coefficient = np.broadcast_to(np.asarray(damping.coefficient, dtype=float) * has_damping, (size,))
+    share = np.broadcast_to(np.asarray(damping.stiffness_share, dtype=float), (size,))
     offsets = tuple(int(v) for v in np.concatenate([[0], np.cumsum(sizes)[:-1]]))
     return Plan(size=int(sum(sizes)), c_struct=np.concatenate(cs), c_mesh=np.concatenate(cm),
                 hardening=hardening, backlash=backlash, has_backlash=has_backlash,
                 friction=friction, has_friction=has_friction.astype(float),
-                damping=np.broadcast_to(coefficient, (sum(sizes),)).astype(float), offsets=offsets)
+                damping=coefficient.astype(float), stiffness_share=share.astype(float),
+                offsets=offsets)
 
 
 # --------------------------------------------------------------------------- the step
@@ -220,9 +227,7 @@ class _Kernel:
         if backlash.id == "dead_zone":
             self.gap = np.asarray(backlash.gap, dtype=float)
             self.width = backlash.contact_rounding * self.gap + 1e-12
-        self.elasto = plan.has_backlash
-        self.any_elasto = bool(np.any(plan.has_backlash))
-        self.all_elasto = bool(np.all(plan.has_backlash))
+        self.has_backlash = plan.has_backlash
         self.friction = plan.friction.id == "dahl"
         if self.friction:
             self.F = np.asarray(plan.friction.torque_max, dtype=float)
@@ -231,6 +236,7 @@ class _Kernel:
             self.sigma_over_F = self.sigma / self.F
             self.sigma_f = self.sigma * self.fmask  # zero slope where the row has no friction
         self.c = plan.damping
+        self.share = plan.stiffness_share
         self.any_damping = bool(np.any(self.c > 0))
         self.dg_floor = 1e-6 * self.k0
 
@@ -247,16 +253,17 @@ class _Kernel:
         """(c β / h, γ ΔT) of the fitted rate for a step of length h (see the class doc).
 
         ``k`` is the spring tangent at the start of the step (from the previous step's
-        last Newton evaluation).
+        last Newton evaluation); it also sets the load-dependent coefficient ``c(e)``.
         """
         if not self.any_damping or not np.isfinite(h):
             return None
+        c = dp.load_dependent_coefficient(self.c, self.share, k / self.k0)
         if self.friction:
             direction = np.where(dT >= 0.0, 1.0, -1.0)
             k = k + fr.dahl_slope(z0, direction, self.sigma_f, self.F)
-        mu = k * h / (self.c + 1e-300)  # c = 0: μ ≈ ∞, β = γ = 0
+        mu = k * h / (c + 1e-300)  # c = 0: μ ≈ ∞, β = γ = 0
         beta, gamma = _phi_functions(mu)
-        return self.c * beta / h, gamma * dT
+        return c * beta / h, gamma * dT
 
     def balance(self, e, e0, z0, torque, rate):
         """(residual Φ + z − T, its derivative in e, spring tangent)."""
@@ -270,46 +277,20 @@ class _Kernel:
             return u - torque, k_body, k
         cb, gdT = rate
         d = cb * (e - e0) + gdT
-        if not self.any_elasto:
-            return u + d - torque, k_body + cb, k
-        # the ElastoBacklash contact rule on the body's elastic torque: damping never pulls
-        limit = np.maximum(np.abs(u), 1e-300)
-        a = np.clip(d / limit, -40.0, 40.0)
-        th = np.tanh(a)
-        sech2 = 1.0 - th * th
-        phi = u + limit * th
-        dphi = (1.0 + np.sign(u) * (th - a * sech2)) * k_body + sech2 * cb
-        if not self.all_elasto:
-            phi = np.where(self.elasto, phi, u + d)
-            dphi = np.where(self.elasto, dphi, k_body + cb)
-        return phi - torque, dphi, k
+        return u + d - torque, k_body + cb, k
 
-    def output_twist(self, e, z):
-        """Output twist x from body twist e and friction torque z (rows, steps).
+    def output_twist(self, e, torque):
+        """Output twist x [rad] from body twist e (rows, steps) and the torque (steps).
 
-        Inverts ``e = engage(x − s) + s`` with ``s = −z/K₀`` (`hdsim.dynamics.ElasticPath`):
-        ``x = s + dead_zone⁻¹(e − s)``. The rounded dead zone is increasing, convex for
-        positive and concave for negative arguments, so Newton from the in-contact guess
-        ``v ± b/2`` approaches the root from outside without overshoot.
+        The dead zone carries the body's torque in series, so it takes the angle
+        ``g(T) = dead_zone⁻¹(T/K₀) − T/K₀`` (`hdsim.dynamics.ElasticPath`): ``x = e + g(T)``.
         """
         if self.gap is None:  # a dead-zone carrier means at least one row has backlash
             return e
-        shift = -z / self.k0[:, None] if self.friction else np.zeros_like(e)
-        v = e - shift
-        half = np.broadcast_to(0.5 * self.gap[:, None], v.shape)
-        width = np.broadcast_to(self.width[:, None], v.shape)
-        y = v + np.sign(v) * half
-        # far in contact the rounding is below 1e-13·width: Newton only near the gap
-        near = self.elasto[:, None] & (np.abs(v) < 40.0 * width)
-        if np.any(near):
-            vn, yn, hn, wn = v[near], y[near], half[near], width[near]
-            for _ in range(60):
-                step = (bl.smooth_dead_zone(yn, hn, wn) - vn) / bl.smooth_contact(yn, hn, wn)
-                yn = yn - step
-                if np.max(np.abs(step)) < 1e-13:
-                    break
-            y[near] = yn
-        return np.where(self.elasto[:, None], shift + y, e)
+        v = np.asarray(torque, dtype=float)[None, :] / self.k0[:, None]
+        v = np.broadcast_to(v, e.shape)
+        y = bl.inverse_smooth_dead_zone(v, 0.5 * self.gap[:, None], self.width[:, None])
+        return np.where(self.has_backlash[:, None], e + (y - v), e)
 
 
 def locked_twist(models, time, torque, *, grid=None, tol=1e-9, x_tol=1e-8, max_iter=60,
@@ -385,11 +366,12 @@ def _locked_twist(plan, time, torque, grid, tol, x_tol, max_iter, return_states)
                              np.abs(dT) / k0)
         e_prev, e, h_prev = e, e_new, h
         e_out[:, j], z_out[:, j] = e, z
-    x_out = kern.output_twist(e_out, z_out)
     if idx.size != t.size:
-        x_out = _interp_rows(t, tg, x_out)
+        # the body twist is smooth between steps; the dead-zone angle is exact at every sample
+        e_out = _interp_rows(t, tg, e_out)
         if return_states:
             z_out = _interp_rows(t, tg, z_out)
+    x_out = kern.output_twist(e_out, T)
     return (x_out, z_out) if return_states else x_out
 
 
@@ -443,7 +425,7 @@ def sample_grid(time, torque, max_steps: int = 4000, zero_band: float = 0.04):
     """Sample indices to step on for a long record (all of them when ``n <= max_steps``).
 
     Elsewhere every ``k``-th sample, plus every sample near zero torque (``|T| <
-    zero_band·max|T|``, where backlash and the damping contact rule act fast) and around
+    zero_band·max|T|``, where the dead-zone angle changes fast) and around
     each turning point of the torque (where friction states change fast); the twist
     between steps is interpolated. The memory states change on torque scales of several
     N·m while neighbouring samples of a 20,000-row bench record differ by ~0.03 N·m, so

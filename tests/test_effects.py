@@ -78,6 +78,25 @@ def test_smooth_dead_zone_converges_to_the_exact_one():
     assert np.max(np.abs(bl.smooth_dead_zone(x, 1.0, 1e-3) - bl.dead_zone(x, 1.0))) < 1e-3
 
 
+@pytest.mark.parametrize("half,width", [(1e-4, 4e-5), (1e-4, 1e-6), (0.0, 1e-12)])
+def test_inverse_smooth_dead_zone_is_the_inverse(half, width):
+    y = np.concatenate([np.linspace(-3e-3, 3e-3, 20001), [0.0, 40 * width, -45 * width]])
+    v = bl.smooth_dead_zone(y, half, width)
+    back = bl.inverse_smooth_dead_zone(v, half, width)
+    # the forward law is flat in the gap (slope ~e^(-h/w)): compare where it has slope
+    sloped = bl.smooth_contact(y, half, width) > 1e-6
+    np.testing.assert_allclose(back[sloped], y[sloped], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(bl.smooth_dead_zone(back, half, width), v, rtol=0, atol=1e-15)
+
+
+def test_optional_parameters_take_their_default():
+    damping = fx.make_effect("damping", "viscous", coefficient=2.0)
+    assert damping.stiffness_share == 0.0
+    assert damping.coefficient_at(3.0) == 2.0  # constant without a stiffness share
+    rayleigh = fx.make_effect("damping", "viscous", coefficient=2.0, stiffness_share=1.0)
+    assert rayleigh.coefficient_at(3.0) == pytest.approx(6.0)  # β·K_t
+
+
 @pytest.mark.parametrize("law", [bl.elasto_backlash_torque, bl.smooth_elasto_backlash_torque])
 def test_elasto_backlash_never_pulls_and_damping_never_exceeds_spring(law):
     rng = np.random.default_rng(0)

@@ -207,6 +207,28 @@ def test_damping_loop_grows_with_rate(seed):
 
 
 @pytest.mark.parametrize("seed", SEEDS)
+def test_damping_with_hardening_grows_like_the_root_of_the_tangent_stiffness(seed):
+    """Constant damping ratio: on a ramp of rate Ṫ the twist lags by
+    τ·sqrt(k1·K_t)·Ṫ/K_t², i.e. ∝ K_t^-1.5; a constant coefficient would give K_t^-2 and
+    stiffness-proportional (Rayleigh, the library's other end) K_t^-1."""
+    damped = stiff({"hardening", "damping"}, seed=seed, hardening_form="cubic")[1]
+    plain = stiff({"hardening"}, seed=seed, hardening_form="cubic")[1]
+    k1, k3 = damped["params"]["k1"], damped["params"]["hardening"]["k3"]
+    first = leg(damped, 0, 0)  # 0 -> +T_N at the slow rate
+    T = damped["clean"]["torque_Nm"][first]
+    lag = plain["clean"]["twist_rad"][first] - damped["clean"]["twist_rad"][first]
+    theta = plain["clean"]["twist_rad"][first]
+    lags, stiffness = [], []
+    for level in (0.15, 0.8):
+        i = np.argmin(np.abs(T - level * truth.RATED_TORQUE_NM))
+        lags.append(lag[i])
+        stiffness.append(k1 + 3 * k3 * theta[i] ** 2)
+    ratio = stiffness[1] / stiffness[0]
+    assert ratio > 1.5  # the tangent stiffness does change
+    assert lags[0] / lags[1] == pytest.approx(ratio**1.5, rel=0.05)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
 def test_unknown_rate_loss_is_neither_friction_nor_viscous(seed):
     cols, tr = stiff({"rate_dependent_unknown"}, seed=seed)
     block = tr["clean"]["block"]

@@ -11,7 +11,7 @@ Truth model (SI units inside)
 The flexspline "body" carries the torque ``T(t)`` applied to the output; its twist
 ``theta_s`` obeys the torque balance of parallel elements::
 
-    T = F_el(theta_s) + H + sum_j v_j + tau_c * F_el'(theta_s) * dtheta_s/dt
+    T = F_el(theta_s) + H + sum_j v_j + tau_c * sqrt(k1 * F_el'(theta_s)) * dtheta_s/dt
 
 and a dead zone sits in series, so the measured angle is::
 
@@ -21,7 +21,7 @@ The stiffness test drives ``T(t)`` (wave generator locked); ``theta_s`` is integ
 with this module's own ``scipy.integrate.solve_ivp`` call (LSODA), restarted at every
 corner of the torque profile. Families and their truth forms; by default none is a form
 hdsim has (three-segment or tanh hardening, Dahl, Coulomb, Maxwell-slip, piecewise or
-tanh dead zone, constant viscous damping, a Fourier-only KE):
+tanh dead zone, constant or stiffness-proportional viscous damping, a Fourier-only KE):
 
 ``base`` (always)
     Linear compliance ``F_el = k1 * theta`` with ``k1 = K1 * U(0.85, 1.15)``
@@ -48,9 +48,12 @@ tanh dead zone, constant viscous damping, a Fourier-only KE):
     Saturated friction torque ``z_u`` chosen so that the loop is
     ``W = U(0.5, 1.5) arcmin`` wide at zero torque (``z_u = W*k1/2``).
 ``damping`` (rate-dependent)
-    Kelvin–Voigt viscous term proportional to the tangent stiffness (Rayleigh
-    damping), ``tau_c * F_el'(theta_s) * dtheta_s/dt``, ``tau_c = U(0.008, 0.020) s``;
-    without hardening this is a constant ``c = k1*tau_c``, about 200–700 N·m·s/rad.
+    Kelvin–Voigt viscous term at a constant damping ratio, the gear-mesh convention
+    ``c = 2 zeta sqrt(k m)`` (e.g. Kahraman & Singh, J. Sound Vib. 142(1), 1990):
+    ``tau_c * sqrt(k1 * F_el'(theta_s)) * dtheta_s/dt``, ``tau_c = U(0.008, 0.020) s``;
+    it grows with the square root of the tangent stiffness, which the library's
+    constant-plus-proportional law can only approximate. Without hardening this is a
+    constant ``c = k1*tau_c``, about 200–700 N·m·s/rad.
     Loop width at zero torque ~ ``2*tau_c*dT/dt/k1``:
     0.2–0.5 arcmin at 87 N·m/s, 0.8–1.9 arcmin at 348 N·m/s. The default torque profile
     has two loading rates (x1 and x4) so damping can be told from friction.
@@ -204,9 +207,9 @@ def draw_friction(seed: int, k1: float, form: str | None = None) -> dict:
 
 
 def draw_damping(seed: int, k1: float) -> dict:
-    """Stiffness-proportional Kelvin–Voigt damping: time constant ``tau_c`` [s].
+    """Kelvin–Voigt damping at a constant damping ratio: time constant ``tau_c`` [s].
 
-    The damper torque is ``tau_c * F_el'(theta) * dtheta/dt``; ``c = tau_c * k1``
+    The damper torque is ``tau_c * sqrt(k1 * F_el'(theta)) * dtheta/dt``; ``c = tau_c * k1``
     [N·m·s/rad] is its value at zero twist (the whole story without hardening).
     """
     rng = _rng(seed, "damping")
@@ -305,8 +308,8 @@ def _body_rhs(params: dict, torque, torque_rate):
         relax = v / taup
         if tau_c > 0.0:
             # Kelvin-Voigt in parallel: the torque balance gives the twist rate directly.
-            # Damping proportional to the tangent stiffness (Rayleigh), not a constant c.
-            rate = (torque(t) - spring - h.sum() - v.sum()) / (tau_c * stiff)
+            # Constant damping ratio: c grows like sqrt(tangent stiffness), not constant.
+            rate = (torque(t) - spring - h.sum() - v.sum()) / (tau_c * np.sqrt(k1 * stiff))
             slope = _friction_slope(h, np.sign(rate), fric) if nf else h
         else:
             # No damper: differentiate the balance, dT = (F' + sum slopes + sum k) dtheta - relax.

@@ -4,7 +4,7 @@
                                            [--only full,nothing] [--merge earlier.json]
 
 Data come from ``tests/truth.py`` (independent forms: Bouc–Wen friction, cubic/sinh
-hardening, a smooth series dead zone, stiffness-proportional damping, a springpot
+hardening, a smooth series dead zone, constant-damping-ratio damping, a springpot
 outside the library), so this measures discovery, not self-consistency. Every case is
 one ``diagnose`` call; the table lists, per group, how often the hidden family was
 ranked first and added first, how often the final error was at most half the baseline,

@@ -56,3 +56,26 @@ def smooth_elasto_backlash_torque(spring_torque, damping_torque):
     """
     limit = np.maximum(np.abs(spring_torque), 1e-300)
     return spring_torque + limit * np.tanh(damping_torque / limit)
+
+
+def inverse_smooth_dead_zone(value, half_gap, width):
+    """The twist ``y`` with ``smooth_dead_zone(y) = value`` [rad], in closed form.
+
+    With ``a = exp(|y|/w)``, ``c = exp(−h/w)`` and ``D = exp(|value|/w)`` the softplus
+    form reads ``D = a(1 + a c)/(a + c)``, a quadratic in ``a``:
+    ``a = [(D − 1) + sqrt((D − 1)² + 4 c² D)]/(2c)`` (both terms positive: no
+    cancellation). Beyond ``40·w`` of the gap the rounding is below ``1e-17·w`` and
+    ``y = value ± h``.
+    """
+    value = np.asarray(value, dtype=float)
+    half = np.broadcast_to(half_gap, value.shape)
+    width = np.broadcast_to(width, value.shape)
+    y = value + np.sign(value) * half
+    near = np.abs(value) < 40.0 * width
+    if np.any(near):
+        v, h, w = value[near], half[near], width[near]
+        c = np.exp(-h / w)
+        d = np.exp(np.abs(v) / w)
+        a = ((d - 1.0) + np.sqrt((d - 1.0) ** 2 + 4.0 * c * c * d)) / (2.0 * c)
+        y[near] = np.sign(v) * w * np.log(a)
+    return y
