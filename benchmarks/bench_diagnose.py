@@ -11,7 +11,7 @@ as a user would run it (a subprocess of the console entry point) and must finish
 (each on all rows and on two hold-out folds, warm and fresh starts), round 2 the two left.
 ``--max-rounds 2`` holds it to the two rounds of the budget: at 20,000 rows the Bouc–Wen
 loop shape that Dahl does not match is significant enough for round 2 to add a proxy
-(damping; see the tutorial's "Known limitation"), and a third round would follow.
+(damping; see the tutorial's "Known limitations"), and a third round would follow.
 """
 
 from __future__ import annotations

@@ -141,13 +141,10 @@ class ElasticPath:
         body = twist - (v - (1.0 - self.contact_compliance_share) * closed)
         # a zero coefficient in a batch: relax within a microsecond instead of dividing by 0
         c = np.maximum(self.damping_coefficient(body), 1e-6 * self.base_tangent)
-        if model.friction.kind == "body":
-            z = states[0]
-            body_rate = (torque - self.spring(body) - z) / c
-            rates = (model.friction.body_slope(z, body_rate) * body_rate,)
-        else:
-            body_rate = (torque - self.spring(body)) / c
-            rates = ()
+        has_friction = model.friction.kind == "body"
+        z = states[0] if has_friction else 0.0
+        body_rate = (torque - self.spring(body) - z) / c
+        rates = (model.friction.body_slope(z, body_rate) * body_rate,) if has_friction else ()
         closure_rate = (twist_rate - body_rate) / (1.0 - (1.0 - self.contact_compliance_share) * contact)
         return torque, rates + (closure_rate,), 0.0
 

@@ -90,9 +90,6 @@ _NEUTRAL = {
     ("damping", "viscous"): {"coefficient": 0.0, "stiffness_share": 0.0},
 }
 
-_BODY = ("hardening", "backlash", "friction", "damping")
-
-
 class UnsupportedEffect(InputError):
     """An effect the quasi-static evaluator does not handle."""
 
@@ -203,7 +200,6 @@ class _Kernel:
     """
 
     def __init__(self, plan: Plan):
-        self.plan = plan
         cs, cm = plan.c_struct, plan.c_mesh
         self.k0 = 1.0 / (cs + cm)  # every supported hardening law starts from K0
         # Law arguments are computed once per evaluation; the laws themselves are the
@@ -231,10 +227,10 @@ class _Kernel:
         self.friction = plan.friction.id == "dahl"
         if self.friction:
             self.F = np.asarray(plan.friction.torque_max, dtype=float)
-            self.sigma = np.asarray(plan.friction.sigma, dtype=float)
+            sigma = np.asarray(plan.friction.sigma, dtype=float)
             self.fmask = plan.has_friction
-            self.sigma_over_F = self.sigma / self.F
-            self.sigma_f = self.sigma * self.fmask  # zero slope where the row has no friction
+            self.sigma_over_F = sigma / self.F
+            self.sigma_f = sigma * self.fmask  # zero slope where the row has no friction
         self.c = plan.damping
         self.share = plan.stiffness_share
         self.any_damping = bool(np.any(self.c > 0))
@@ -266,7 +262,7 @@ class _Kernel:
         return c * beta / h, gamma * dT
 
     def balance(self, e, e0, z0, torque, rate):
-        """(residual Φ + z − T, its derivative in e, spring tangent)."""
+        """(residual u + z + d − T, its derivative in e, spring tangent)."""
         u, k = self._spring(e)
         if self.friction:
             z, dz = self.dahl(z0, e - e0)
@@ -350,12 +346,14 @@ def _locked_twist(plan, time, torque, grid, tol, x_tol, max_iter, return_states)
     M = plan.size
     tol_T = tol * max(float(np.max(np.abs(T))), 1e-12)
     e_out = np.empty((M, idx.size))
-    z_out = np.empty((M, idx.size))
+    z_out = np.empty((M, idx.size)) if return_states else None
     k0 = kern.k0
     zeros = np.zeros(M)
     e, z, k = _solve(kern, Tg[0] / k0, zeros, zeros, Tg[0], None, tol_T, x_tol,
                      max_iter, np.abs(Tg[0]) / k0)
-    e_out[:, 0], z_out[:, 0] = e, z
+    e_out[:, 0] = e
+    if return_states:
+        z_out[:, 0] = z
     e_prev, h_prev = e, None
     for j in range(1, idx.size):
         h = tg[j] - tg[j - 1]
@@ -365,7 +363,9 @@ def _locked_twist(plan, time, torque, grid, tol, x_tol, max_iter, return_states)
         e_new, z, k = _solve(kern, guess, e, z, Tg[j], rate, tol_T, x_tol, max_iter,
                              np.abs(dT) / k0)
         e_prev, e, h_prev = e, e_new, h
-        e_out[:, j], z_out[:, j] = e, z
+        e_out[:, j] = e
+        if return_states:
+            z_out[:, j] = z
     if idx.size != t.size:
         # the body twist is smooth between steps; the dead-zone angle is exact at every sample
         e_out = _interp_rows(t, tg, e_out)
@@ -386,7 +386,7 @@ def _solve(kern, guess, e0, z0, torque, rate, tol_T, x_tol, max_iter, x_scale):
     lo = hi = None
     for it in range(max_iter):
         g, dg, k = kern.balance(x, e0, z0, torque, rate)
-        # the balance is increasing in e but may be flat (an opening contact): floor dg
+        # the balance is increasing in e (dg ≥ spring tangent > 0); the floor guards round-off
         step = -g / np.maximum(dg, kern.dg_floor)
         if it >= 3:
             if lo is None:

@@ -10,6 +10,7 @@ short records; the battery with the rates of the done-when list is ``-m slow`` (
 
 from __future__ import annotations
 
+import functools
 import json
 
 import numpy as np
@@ -128,7 +129,9 @@ FAMILIES = ("hardening", "backlash", "friction", "damping")
 SEEDS = (0, 1, 2, 3, 4)
 
 
+@functools.lru_cache(maxsize=None)
 def _battery():
+    """validation/diagnosis_battery.py as a module (loaded once per session)."""
     import importlib.util
     from pathlib import Path
 
