@@ -36,7 +36,7 @@ def main(rows: int = 20000) -> int:
         cols, tr = truth.make_stiffness_data({"hardening"}, {"friction"}, seed=1, n_rows=rows)
         truth.write_csv(path, cols, tr["meta"])
         t0 = time.perf_counter()
-        out = subprocess.run([sys.executable, "-m", "hdsim.cli", "diagnose", str(path),
+        out = subprocess.run([sys.executable, "-m", "hdsim", "diagnose", str(path),
                               "--effects", "friction", "--max-rounds", "2", "--json"],
                              capture_output=True, text=True)
         seconds = time.perf_counter() - t0

@@ -16,9 +16,9 @@ import argparse
 import time
 from pathlib import Path
 
-from hdsim.catalog import load_unit
-from hdsim.run import run_scenario
-from hdsim.scenario import Scenario, load_scenario
+from hdsim.model.catalog import load_unit
+from hdsim.scenarios.run import run_scenario
+from hdsim.scenarios.scenario import Scenario, load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -14,10 +14,10 @@ import time
 
 import numpy as np
 
-from hdsim.batch import STUDY_SAMPLES, STUDY_SOLVER, model_function, nominal_values
-from hdsim.catalog import load_unit
-from hdsim.run import run_scenario
-from hdsim.scenario import builtin_scenario_path, load_scenario
+from hdsim.sensitivity.scenario_outputs import STUDY_SAMPLES, STUDY_SOLVER, model_function, nominal_values
+from hdsim.model.catalog import load_unit
+from hdsim.scenarios.run import run_scenario
+from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario
 from hdsim.sensitivity.problem import build_problem
 from hdsim.sensitivity.study import run_study
 

@@ -25,9 +25,9 @@ def main() -> None:
     sys.path.insert(0, str(ROOT / "tests"))
     import truth
 
-    from hdsim.diagnosis import diagnose
-    from hdsim.measurement import load_measurement
-    from hdsim.report import FIGURES, write_report
+    from hdsim.identification.diagnosis import diagnose
+    from hdsim.io.measurement import load_measurement
+    from hdsim.identification.report import FIGURES, write_report
 
     FIG.mkdir(parents=True, exist_ok=True)
     cols, tr = truth.make_stiffness_data({"damping"}, {"friction"}, seed=1, n_rows=2000)

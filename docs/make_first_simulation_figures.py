@@ -17,11 +17,11 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from hdsim.catalog import load_unit  # noqa: E402
-from hdsim.plotting import plot_loop, plot_time  # noqa: E402
-from hdsim.results import read_result, write_result  # noqa: E402
-from hdsim.run import run_scenario  # noqa: E402
-from hdsim.scenario import builtin_scenario_path, load_scenario  # noqa: E402
+from hdsim.model.catalog import load_unit  # noqa: E402
+from hdsim.plotting.locked import plot_loop, plot_time  # noqa: E402
+from hdsim.io.results import read_result, write_result  # noqa: E402
+from hdsim.scenarios.run import run_scenario  # noqa: E402
+from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario  # noqa: E402
 from hdsim.units import rad_to_arcmin  # noqa: E402
 
 FIGURES = Path(__file__).resolve().parent / "figures"

@@ -3,7 +3,7 @@
     python docs/make_ke_figures.py        # about 40 s on 2 cores
 
 Uses the calls shown in the tutorial (load_unit, load_scenario, run_scenario, the
-hdsim.driven and hdsim.ke_metrics functions) and prints every number the tutorial quotes.
+hdsim.simulation.driven and hdsim.scenarios.ke_metrics functions) and prints every number the tutorial quotes.
 """
 
 from __future__ import annotations
@@ -17,11 +17,11 @@ import control  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from hdsim import ke_metrics  # noqa: E402
-from hdsim.catalog import load_unit  # noqa: E402
-from hdsim.driven import bench_from_scenario, linear_model, linear_summary  # noqa: E402
-from hdsim.run import run_scenario  # noqa: E402
-from hdsim.scenario import builtin_scenario_path, load_scenario  # noqa: E402
+from hdsim.scenarios import ke_metrics  # noqa: E402
+from hdsim.model.catalog import load_unit  # noqa: E402
+from hdsim.simulation.driven import bench_from_scenario, linear_model, linear_summary  # noqa: E402
+from hdsim.scenarios.run import run_scenario  # noqa: E402
+from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario  # noqa: E402
 from hdsim.units import rad_to_arcsec  # noqa: E402
 
 FIGURES = Path(__file__).resolve().parent / "figures"

@@ -19,14 +19,14 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from hdsim.catalog import catalog_entry, load_unit, unit_names  # noqa: E402
-from hdsim.model import compliance_chain  # noqa: E402
+from hdsim.model.catalog import catalog_entry, load_unit, unit_names  # noqa: E402
+from hdsim.model.drive import compliance_chain  # noqa: E402
 from hdsim.physics import backlash as bl  # noqa: E402
 from hdsim.physics import compliance as cc  # noqa: E402
 from hdsim.physics import stiffness as st  # noqa: E402
-from hdsim.run import run_scenario  # noqa: E402
-from hdsim.scenario import builtin_scenario_path, load_scenario  # noqa: E402
-from hdsim.simulate import SolverOptions  # noqa: E402
+from hdsim.scenarios.run import run_scenario  # noqa: E402
+from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario  # noqa: E402
+from hdsim.simulation.solver import SolverOptions  # noqa: E402
 from hdsim.units import rad_to_arcmin  # noqa: E402
 
 FIGURES = Path(__file__).resolve().parent / "figures"

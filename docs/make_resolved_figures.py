@@ -14,8 +14,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from hdsim.batch import series_function  # noqa: E402
-from hdsim.catalog import load_unit  # noqa: E402
+from hdsim.sensitivity.scenario_outputs import series_function  # noqa: E402
+from hdsim.model.catalog import load_unit  # noqa: E402
 from hdsim.sensitivity.problem import uniform  # noqa: E402
 from hdsim.sensitivity.resolved import resolved_indices  # noqa: E402
 

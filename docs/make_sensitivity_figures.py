@@ -3,7 +3,7 @@
     python docs/make_sensitivity_figures.py            # closed forms (about 10 s)
     python docs/make_sensitivity_figures.py --unit     # plus the flexspline study
 
-The flexspline figure needs the simulator's batch interface (``hdsim.batch``).
+The flexspline figure needs the simulator's batch interface (``hdsim.sensitivity.scenario_outputs``).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from hdsim.sensitivity import Ishigami, Linear, run_study
 from hdsim.sensitivity.analysis import analyse
 from hdsim.sensitivity.design import replicate_seed, sample_replicate
 from hdsim.sensitivity.evaluate import evaluate
-from hdsim.sensitivity.plots import _pyplot, _save, plot_convergence, plot_indices
+from hdsim.plotting.sensitivity import _pyplot, _save, plot_convergence, plot_indices
 
 FIGURES = Path(__file__).resolve().parent / "figures"
 

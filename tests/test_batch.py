@@ -7,12 +7,12 @@ import sys
 import numpy as np
 import pytest
 
-from hdsim.batch import model_function, nominal_values, resolve_names
-from hdsim.catalog import load_unit
+from hdsim.sensitivity.scenario_outputs import model_function, nominal_values, resolve_names
+from hdsim.model.catalog import load_unit
 from hdsim.errors import InputError
-from hdsim.run import run_scenario
-from hdsim.scenario import builtin_scenario_path, load_scenario
-from hdsim.simulate import SolverOptions
+from hdsim.scenarios.run import run_scenario
+from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario
+from hdsim.simulation.solver import SolverOptions
 
 NAMES = ["h_pz", "h_c", "R_v", "R_k", "h_p"]
 

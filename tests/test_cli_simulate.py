@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hdsim.results import read_result
+from hdsim.io.results import read_result
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from hdsim.catalog import load_unit, nominal_geometry, unit_names
+from hdsim.model.catalog import load_unit, nominal_geometry, unit_names
 from hdsim.errors import InputError
 from hdsim.physics import compliance as cc
 

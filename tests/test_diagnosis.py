@@ -18,8 +18,8 @@ import pytest
 
 import truth
 from hdsim.cli import main
-from hdsim.diagnosis import diagnose, folds
-from hdsim.measurement import make_measurement
+from hdsim.identification.diagnosis import diagnose, folds
+from hdsim.io.measurement import make_measurement
 
 CONTRACT_KEYS = {"test", "baseline", "ranking", "added", "final", "ambiguous"}
 

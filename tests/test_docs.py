@@ -58,7 +58,7 @@ def test_mkdocs_build_strict_has_no_warnings(tmp_path):
 
 def test_nomenclature_lists_every_parameter_of_the_default_unit():
     """Every dotted parameter name of the default unit appears on the nomenclature page."""
-    from hdsim.catalog import load_unit
+    from hdsim.model.catalog import load_unit
 
     page = (ROOT / "docs" / "nomenclature.md").read_text(encoding="utf-8")
     absent = [name for name in load_unit().params() if f"`{name}`" not in page]

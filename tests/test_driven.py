@@ -14,12 +14,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hdsim import ke_metrics
-from hdsim.catalog import load_unit
-from hdsim.driven import SETUP, bench_from_scenario, read_profile_csv
+from hdsim.scenarios import ke_metrics
+from hdsim.model.catalog import load_unit
+from hdsim.simulation.driven import SETUP, bench_from_scenario, read_profile_csv
 from hdsim.errors import InputError
-from hdsim.run import run_scenario
-from hdsim.scenario import Scenario, load_scenario
+from hdsim.scenarios.run import run_scenario
+from hdsim.scenarios.scenario import Scenario, load_scenario
 from hdsim.units import arcsec_to_rad, rad_to_arcsec
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -176,7 +176,7 @@ def test_metric_functions_on_synthetic_signals():
 
 
 def test_driven_figures(tmp_path):
-    from hdsim.driven_plots import plot_deviation, plot_driven_time
+    from hdsim.plotting.driven import plot_deviation, plot_driven_time
 
     sc = load_scenario(ROOT / "scenarios/kinematic_error.toml").with_updates(
         {"input.output_revolutions": 0.02, "input.settle_revolutions": 0.0})

@@ -16,15 +16,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hdsim.catalog import load_unit, unit_names
-from hdsim.driven import (NO_LOAD, Motion, PIController, bench_from_scenario, driven_wave_generator,
+from hdsim.model.catalog import load_unit, unit_names
+from hdsim.simulation.driven import (NO_LOAD, Motion, PIController, bench_from_scenario, driven_wave_generator,
                           energy_balance, frequency_response_check, integrate_segments, linear_model,
                           starting_torque, step_schedule)
-from hdsim.input_friction import CATALOG_SPEED, for_unit
-from hdsim.model import SLOTS
-from hdsim.run import run_scenario
-from hdsim.scenario import Scenario, load_scenario
-from hdsim.simulate import SolverOptions, integrate
+from hdsim.model.input_friction import CATALOG_SPEED, for_unit
+from hdsim.model.drive import SLOTS
+from hdsim.scenarios.run import run_scenario
+from hdsim.scenarios.scenario import Scenario, load_scenario
+from hdsim.simulation.solver import SolverOptions, integrate
 from hdsim.units import arcmin_to_rad, rad_to_arcsec, rpm_to_rad_per_s
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -5,13 +5,13 @@ import dataclasses
 import numpy as np
 import pytest
 
-from hdsim import effects as fx
-from hdsim.catalog import load_unit
+from hdsim.model import effects as fx
+from hdsim.model.catalog import load_unit
 from hdsim.physics import backlash as bl
 from hdsim.physics import friction as fr
 from hdsim.physics import stiffness as st
-from hdsim.run import run_scenario
-from hdsim.scenario import builtin_scenario_path, load_scenario
+from hdsim.scenarios.run import run_scenario
+from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario
 
 K1 = 3.1e4
 SAMPLE = {  # one physically sensible parameter set per effect of the registry

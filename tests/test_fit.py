@@ -13,14 +13,14 @@ import sys
 import numpy as np
 import pytest
 
-from hdsim import effects as fx
-from hdsim.catalog import load_unit
+from hdsim.model import effects as fx
+from hdsim.model.catalog import load_unit
 from hdsim.errors import InputError
-from hdsim.fit import fit, load_fitted, parse_effects, split_stiffness
-from hdsim.measurement import make_measurement
+from hdsim.identification.fit import fit, load_fitted, parse_effects, split_stiffness
+from hdsim.io.measurement import make_measurement
 from hdsim.physics import friction as fr
-from hdsim.profiles import cosine_ramps
-from hdsim.quasistatic import (UnsupportedEffect, dynamic_locked_twist, locked_twist,
+from hdsim.scenarios.profiles import cosine_ramps
+from hdsim.simulation.quasistatic import (UnsupportedEffect, dynamic_locked_twist, locked_twist,
                                sample_grid, stack_models)
 
 UNIT = load_unit()
@@ -129,7 +129,7 @@ def test_dahl_update_is_the_exact_solution_of_the_library_law():
         sol = solve_ivp(lambda th, z: [fr.dahl_rate(z[0], np.sign(dx), sigma, F)], (0, abs(dx)), [z0],
                         rtol=1e-11, atol=1e-12)
         model = UNIT.with_effects(friction=fx.DahlFriction(torque_max=F, sigma=sigma))
-        from hdsim.quasistatic import _Kernel
+        from hdsim.simulation.quasistatic import _Kernel
 
         kern = _Kernel(stack_models(model))
         z, _ = kern.dahl(np.array([z0]), np.array([dx]))
@@ -265,7 +265,7 @@ def test_fit_refuses_an_effect_it_cannot_evaluate():
 
 
 def run_cli(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "hdsim.cli", *args], capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "hdsim", *args], capture_output=True, text=True,
                           cwd=cwd, timeout=300)
 
 

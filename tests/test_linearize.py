@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from hdsim.catalog import load_unit
-from hdsim.dynamics import locked_wave_generator
-from hdsim.linearize import linearize, natural_frequencies
-from hdsim.simulate import SolverOptions, integrate
+from hdsim.model.catalog import load_unit
+from hdsim.simulation.path import locked_wave_generator
+from hdsim.simulation.linearize import linearize, natural_frequencies
+from hdsim.simulation.solver import SolverOptions, integrate
 
 
 def _ringdown_frequency(model, theta0, torque, equilibrium=0.0, periods=12):

@@ -14,7 +14,7 @@ import pytest
 
 import truth
 from hdsim.errors import InputError
-from hdsim.measurement import (
+from hdsim.io.measurement import (
     ANGLE_UNITS,
     Measurement,
     load_measurement,

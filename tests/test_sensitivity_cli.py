@@ -77,7 +77,7 @@ def test_bad_input_exits_2_with_one_line(argv, fragment, capsys):
 
 
 def test_bad_input_in_a_subprocess_has_no_traceback():
-    proc = subprocess.run([sys.executable, "-m", "hdsim.cli", "sobol", "--function",
+    proc = subprocess.run([sys.executable, "-m", "hdsim", "sobol", "--function",
                            "ishigami", "--n", "100", "--json"], capture_output=True, text=True)
     assert proc.returncode == 2 and proc.stdout == ""
     assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
@@ -89,11 +89,11 @@ def test_unit_study_through_simulator(capsys):
     argv = ["sobol", "--unit", "CSG-25-100", "--params", "h_pz,h_c", "--range", "10%",
             "--output", "lost_motion_arcmin", "--n", "16", "--replicates", "2",
             "--workers", "1", "--json"]
-    if importlib.util.find_spec("hdsim.batch") is None:
+    if importlib.util.find_spec("hdsim.sensitivity.scenario_outputs") is None:
         # Until the simulator's batch interface lands: one line, exit 1, no traceback.
         assert main(argv) == 1
         err = capsys.readouterr().err.strip().splitlines()
-        assert len(err) == 1 and "hdsim.batch" in err[0]
+        assert len(err) == 1 and "hdsim.sensitivity.scenario_outputs" in err[0]
         return
     out = _json(capsys, argv)
     assert out["output"] == "lost_motion_arcmin" and out["evaluations"] == 16 * 4

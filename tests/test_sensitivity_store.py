@@ -43,7 +43,7 @@ ARGS = ["--model", "slowmodel:slow", "--params", "x1,x2,x3",
 def _run(tmp_path, out, log, extra=(), wait=True):
     env = {**os.environ, "PYTHONPATH": f"{tmp_path}{os.pathsep}{os.environ.get('PYTHONPATH', '')}",
            "SLOW_LOG": str(log)}
-    cmd = [sys.executable, "-m", "hdsim.cli", "sobol", *ARGS, "--out", str(out), *extra]
+    cmd = [sys.executable, "-m", "hdsim", "sobol", *ARGS, "--out", str(out), *extra]
     proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True, start_new_session=True)
     if wait:

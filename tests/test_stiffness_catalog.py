@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from hdsim.catalog import catalog_entry, load_unit, unit_names
+from hdsim.model.catalog import catalog_entry, load_unit, unit_names
 from hdsim.physics.stiffness import (fit_three_segment, smooth_three_segment_torque, three_segment_torque,
                                      three_segment_twist)
-from hdsim.run import run_scenario
-from hdsim.scenario import builtin_scenario_path, load_scenario
+from hdsim.scenarios.run import run_scenario
+from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario
 from hdsim.units import arcmin_to_rad, rad_to_arcmin
 
 

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import truth
-from hdsim.measurement import load_measurement
+from hdsim.io.measurement import load_measurement
 
 ARCMIN = truth.ARCMIN
 SEEDS = [0, 1, 2]

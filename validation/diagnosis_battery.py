@@ -41,8 +41,8 @@ GROUPS = {
 
 def run_case(group: str, seed: int) -> dict:
     import truth
-    from hdsim.diagnosis import diagnose
-    from hdsim.measurement import make_measurement
+    from hdsim.identification.diagnosis import diagnose
+    from hdsim.io.measurement import make_measurement
 
     hidden, base = GROUPS[group]
     start = time.perf_counter()
@@ -109,7 +109,7 @@ def main(argv=None):
         rows += json.loads(earlier.read_text())["cases"]
     lines = summarise(rows)
     print("\n".join(lines))
-    from hdsim.atomic import write_text_atomic
+    from hdsim.io.atomic import write_text_atomic
 
     args.out.parent.mkdir(parents=True, exist_ok=True)
     write_text_atomic(args.out, json.dumps({"table": lines, "cases": rows}, indent=1))

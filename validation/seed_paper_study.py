@@ -19,8 +19,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from hdsim.batch import model_function, nominal_values  # noqa: E402
-from hdsim.catalog import load_unit  # noqa: E402
+from hdsim.sensitivity.scenario_outputs import model_function, nominal_values  # noqa: E402
+from hdsim.model.catalog import load_unit  # noqa: E402
 from hdsim.sensitivity.problem import build_problem  # noqa: E402
 from hdsim.sensitivity.study import run_study  # noqa: E402
 

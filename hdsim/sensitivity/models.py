@@ -17,7 +17,7 @@ from hdsim.sensitivity.problem import build_problem
 def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, dists=None):
     """Study of simulator ``unit``: parameters by dotted name, ``output`` a metric.
 
-    Calls `hdsim.batch.nominal_values` and `hdsim.batch.model_function`
+    Calls `hdsim.sensitivity.scenario_outputs.nominal_values` and `hdsim.sensitivity.scenario_outputs.model_function`
     (imported lazily: the simulator is only needed for unit studies).
     """
     if not output:
@@ -63,4 +63,4 @@ def from_import(spec, names, output=None, range_frac=None, bounds=None, dists=No
 def _batch():
     """The simulator's batch interface, imported only for --unit studies (it loads scipy
     solvers and the unit catalog, which analytic-function studies do not need)."""
-    return importlib.import_module("hdsim.batch")
+    return importlib.import_module("hdsim.sensitivity.scenario_outputs")

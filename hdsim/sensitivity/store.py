@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hdsim.atomic import atomic_path
+from hdsim.io.atomic import atomic_path
 from hdsim.errors import InputError
 from hdsim.sensitivity.layout import PIECE, Layout, runs
 

@@ -1,0 +1,98 @@
+"""Helpers shared by the simulation verbs: ``--set`` parsing, running, writing."""
+
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from hdsim.model.effects import FAMILIES, NO_EFFECT
+from hdsim.errors import InputError, unknown_name
+from hdsim.model.drive import HarmonicDrive
+from hdsim.scenarios.scenario import Scenario
+
+
+def add_set_argument(parser) -> None:
+    parser.add_argument(
+        "--set", dest="sets", action="append", default=[], metavar="NAME=VALUE",
+        help="change a parameter (SI units), e.g. flexspline.h_c=0.6e-3; switch an effect off "
+             "with FAMILY=none, e.g. backlash=none; change the scenario with scenario.load.rate=0.1")
+
+
+def parse_sets(items) -> dict[str, str]:
+    out = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip() or not value.strip():
+            raise InputError(f"--set expects NAME=VALUE, got '{item}'")
+        out[name.strip()] = value.strip()
+    return out
+
+
+def _number(name, text) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise InputError(f"--set {name}: '{text}' is not a number") from None
+    if not math.isfinite(value):
+        raise InputError(f"--set {name}: value must be finite")
+    return value
+
+
+def apply_sets(model: HarmonicDrive, scenario: Scenario, sets: dict[str, str]):
+    """(model, scenario) with the ``--set`` changes applied; every name is checked first."""
+    scenario_updates, effect_switches, params = {}, {}, {}
+    known = model.params()
+    for name, text in sets.items():
+        if name.startswith("scenario."):
+            scenario_updates[name[len("scenario."):]] = text
+        elif name in FAMILIES:
+            if text != "none":
+                raise InputError(f"--set {name}={text}: only 'none' can be set on a family from the "
+                                 f"command line (switches the {name} effect off)")
+            effect_switches[name] = NO_EFFECT[name]
+        elif name in known:
+            params[name] = _number(name, text)
+        else:
+            raise unknown_name("parameter", name, list(known) + list(FAMILIES))
+    scenario = scenario.with_updates(scenario_updates) if scenario_updates else scenario
+    model = model.with_updates(params) if params else model
+    model = model.with_effects(**effect_switches) if effect_switches else model
+    return model, scenario
+
+
+def metrics_as_floats(metrics: dict) -> dict[str, float]:
+    return {name: float(np.asarray(value).reshape(-1)[0]) for name, value in metrics.items()}
+
+
+def print_metrics(title: str, metrics: dict[str, float], stream=sys.stdout) -> None:
+    print(title, file=stream)
+    width = max(len(k) for k in metrics) if metrics else 0
+    for name, value in metrics.items():
+        print(f"  {name:<{width}}  {value:.6g}", file=stream)
+
+
+def _figures(setup: str) -> dict:
+    """The figures a person looks at for each bench set-up: name -> plot function."""
+    from hdsim.plotting import driven as driven_plots, locked as plotting
+
+    if setup == "driven_wave_generator":
+        return {"deviation": driven_plots.plot_deviation, "time": driven_plots.plot_driven_time}
+    return {"loop": plotting.plot_loop, "time": plotting.plot_time}
+
+
+def write_outputs(run, out_dir: Path, figures: bool = True) -> dict[str, str]:
+    """HDF5 result and figures for a finished run; returns the paths written."""
+    from hdsim.plotting import locked as plotting
+    from hdsim.io.results import write_result
+
+    out_dir = Path(out_dir)
+    paths = {"result": str(write_result(out_dir / f"{run.scenario.name}.h5", run))}
+    if figures:
+        for kind, draw in _figures(run.result.setup).items():
+            path = out_dir / f"{run.scenario.name}_{kind}.png"
+            plotting.save(draw(run), path)
+            paths[f"{kind}_figure"] = str(path)
+    return paths

@@ -1,0 +1,43 @@
+"""``hdsim simulate SCENARIO.toml``: run one scenario on one unit."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from hdsim.model.catalog import load_unit
+from hdsim.cli import _common
+from hdsim.scenarios.run import run_scenario
+from hdsim.scenarios.scenario import load_scenario
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("simulate", help="run a scenario file on a unit",
+                              description="Run a scenario (TOML) on a built-in unit; write an HDF5 "
+                                          "result and figures to --out.")
+    p.add_argument("scenario", help="scenario file, e.g. scenarios/lost_motion.toml")
+    p.add_argument("--unit", default=None, help="built-in unit (default CSG-25-100); see 'hdsim units'")
+    _common.add_set_argument(p)
+    p.add_argument("--out", default="hdsim-out", help="output folder (default ./hdsim-out)")
+    p.add_argument("--no-figures", action="store_true", help="write the HDF5 result only")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    p.set_defaults(func=main)
+
+
+def main(args) -> int:
+    # everything that can be wrong with the input is checked before anything is written
+    scenario = load_scenario(args.scenario)
+    model, scenario = _common.apply_sets(load_unit(args.unit), scenario, _common.parse_sets(args.sets))
+    run = run_scenario(model, scenario)
+    paths = _common.write_outputs(run, Path(args.out), figures=not args.no_figures)
+    metrics = _common.metrics_as_floats(run.metrics)
+    if args.json:
+        from hdsim.cli import emit_json
+
+        emit_json({"scenario": scenario.name, "unit": model.name, "metrics": metrics,
+                   "result": paths["result"], "files": paths})
+    else:
+        _common.print_metrics(f"{scenario.name} on {model.name}:", metrics)
+        print(f"result: {paths['result']}")
+    print(f"wrote {', '.join(paths.values())}", file=sys.stderr)
+    return 0

@@ -1,0 +1,166 @@
+"""``hdsim sobol``: Sobol' sensitivity of a simulator output or a closed-form function.
+
+Examples::
+
+    hdsim sobol --unit CSG-25-100 --params h_pz,h_c,R_v,R_k,h_p --range 10% \\
+                --output lost_motion_arcmin --n 1024 --second-order --out study.h5 --json
+    hdsim sobol --function ishigami --n 4096 --json
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+from hdsim.errors import InputError
+
+HELP = "Sobol' sensitivity study (first, total, optional second order) with checks"
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("sobol", help=HELP, description=HELP + ".")
+    what = p.add_mutually_exclusive_group()
+    what.add_argument("--unit", help="built-in unit to study through the simulator")
+    what.add_argument("--function", help="closed form: ishigami, gfunction or linear")
+    what.add_argument("--model", metavar="MODULE:CALLABLE",
+                      help="any picklable f(X) -> y importable from PYTHONPATH")
+    p.add_argument("--params", default="", help="comma-separated parameter names")
+    p.add_argument("--range", dest="range_", metavar="P%",
+                   help="uniform within ±P %% of each nominal value")
+    p.add_argument("--bounds", nargs="+", action="extend", default=[], metavar="NAME=LO:HI",
+                   help="explicit bounds for one or more parameters")
+    p.add_argument("--dist", nargs="+", action="extend", default=[],
+                   metavar="NAME=unif|logunif|norm[:MEAN:SD]", help="input distribution")
+    p.add_argument("--output", help="metric to study (required with --unit)")
+    p.add_argument("--scenario", help="scenario the metric comes from (--unit)")
+    p.add_argument("--n", default="1024", help="base points N, a power of 2 (default 1024)")
+    p.add_argument("--second-order", action="store_true", help="also estimate S2")
+    p.add_argument("--seed", default="0", help="scramble seed (default 0)")
+    p.add_argument("--replicates", default="4",
+                   help="independent scrambles of N/R base points each (default 4)")
+    p.add_argument("--executor", default="local", help="local (default) or dask://HOST:PORT")
+    p.add_argument("--workers", default="2", help="local processes (1 = in-process)")
+    p.add_argument("--chunksize", default=None, help="rows per task (default: automatic)")
+    p.add_argument("--out", help="HDF5 study file; every finished sample is flushed to it")
+    p.add_argument("--resume", action="store_true", help="continue (or extend N of) --out")
+    p.add_argument("--retry-failed", action="store_true", help="with --resume: rerun failed rows")
+    p.add_argument("--target-width", default=None,
+                   help="double N up to --n until every 95 %% interval is narrower")
+    p.add_argument("--report", metavar="DIR", help="write figures and the summary here")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from hdsim.sensitivity import models
+    from hdsim.sensitivity.evaluate import open_executor
+    from hdsim.sensitivity.study import run_study
+
+    t0 = time.perf_counter()
+    n, seed = _int(args.n, "--n"), _int(args.seed, "--seed")
+    reps, workers = _int(args.replicates, "--replicates"), _int(args.workers, "--workers")
+    chunksize = _int(args.chunksize, "--chunksize") if args.chunksize else None
+    target = _float(args.target_width, "--target-width") if args.target_width else None
+    if args.resume and not args.out:
+        raise InputError("--resume needs --out STUDY.h5")
+    try:
+        func, problem, output, model, analytic = _resolve(args, models)
+        with open_executor(args.executor, workers) as executor:
+            result = run_study(func, problem, n, seed=seed, second_order=args.second_order,
+                               replicates=reps, executor=executor, workers=workers,
+                               chunksize=chunksize, out=args.out, resume=args.resume,
+                               retry_failed=args.retry_failed, target_width=target,
+                               model=model)
+    except RuntimeError as exc:  # model failing everywhere, broken pool, no hdsim.sensitivity.scenario_outputs
+        print(f"hdsim sobol: error: {exc}", file=sys.stderr)
+        return 1
+    summary = result.to_json(output)
+    summary["seconds"] = round(time.perf_counter() - t0, 3)
+    summary.update(_extras(args, model, analytic, problem.names, result))
+    _write_outputs(args, summary, result, analytic, target)
+    if args.json:
+        from hdsim.cli import emit_json
+
+        emit_json(summary)
+    else:
+        _print_table(summary)
+    return 0
+
+
+def _resolve(args, models):
+    """(func, problem, output, model description, analytic indices or None)."""
+    from hdsim.sensitivity.problem import parse_assignments, parse_range
+
+    names = [s.strip() for s in args.params.split(",") if s.strip()]
+    frac = parse_range(args.range_) if args.range_ else None
+    bounds = parse_assignments(args.bounds, "--bounds")
+    dists = parse_assignments(args.dist, "--dist")
+    if args.function:
+        if names or bounds or dists or frac is not None:
+            raise InputError("--function has its own inputs: "
+                             "drop --params, --range, --bounds and --dist")
+        return models.from_function(args.function, args.output)
+    if args.model:
+        return models.from_import(args.model, names, args.output, frac, bounds, dists)
+    if args.unit:
+        if not names:
+            raise InputError("--unit studies need --params NAME,NAME,...")
+        return models.from_unit(args.unit, names, args.output, args.scenario, frac, bounds, dists)
+    raise InputError("say what to study: --unit U, --function NAME or --model MODULE:CALLABLE")
+
+
+def _extras(args, model, analytic, names, result) -> dict:
+    extra = {"model": model, "executor": args.executor}
+    if analytic is not None:
+        a = {k: {nm: float(v) for nm, v in zip(names, analytic[k])} for k in ("S1", "ST")}
+        a["max_abs_error"] = {k: max(abs(result.analysis[k][i] - analytic[k][i])
+                                     for i in range(len(names))) for k in ("S1", "ST")}
+        extra["analytic"] = a
+    return extra
+
+
+def _write_outputs(args, summary, result, analytic, target) -> None:
+    """Figures and the JSON summary: into ``--report DIR`` or next to ``--out``."""
+    from hdsim.io.atomic import write_text_atomic
+    from hdsim.plotting.sensitivity import plot_convergence, plot_indices
+
+    if args.report:
+        folder, stem = Path(args.report), "sobol"
+    elif args.out:
+        folder, stem = Path(args.out).parent, Path(args.out).stem
+    else:
+        return
+    names = list(result.problem.names)
+    figs = [plot_indices(folder / f"{stem}_indices.png", names, result.analysis, analytic,
+                         title=f"{summary['output']}: N = {result.n}")]
+    if len(result.convergence) > 1:
+        figs.append(plot_convergence(folder / f"{stem}_convergence.png", names,
+                                     result.convergence, target, analytic))
+    summary["figures"] = [str(f) for f in figs]
+    write_text_atomic(folder / f"{stem}.json", json.dumps(summary, indent=1, allow_nan=False))
+
+
+def _print_table(s) -> None:
+    print(f"{s['output']}: N = {s['n']}, {s['evaluations']} evaluations, {s['seconds']} s")
+    print(f"{'param':>12} {'S1':>8} {'±boot':>7} {'±rep':>7} {'ST':>8} {'±boot':>7} {'±rep':>7}")
+    for nm in s["params"]:
+        vals = (s["S1"][nm], s["S1_conf"][nm], s["S1_conf_replicates"][nm],
+                s["ST"][nm], s["ST_conf"][nm], s["ST_conf_replicates"][nm])
+        print(f"{nm:>12} " + " ".join("     nan" if v is None else f"{v:8.4f}" for v in vals))
+    print("checks: " + ("all pass" if s["checks"]["ok"] else "FAILED (see stderr)"))
+
+
+def _int(text, option) -> int:
+    try:
+        return int(str(text).strip())
+    except ValueError:
+        raise InputError(f"{option} expects an integer, got '{text}'") from None
+
+
+def _float(text, option) -> float:
+    try:
+        return float(str(text).strip())
+    except ValueError:
+        raise InputError(f"{option} expects a number, got '{text}'") from None

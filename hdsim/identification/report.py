@@ -1,0 +1,282 @@
+"""The diagnosis report: PNG figures of every step plus an HTML and a Markdown page.
+
+``write_report(diagnosis, folder)`` writes
+
+- ``measured_vs_model.png``: measured angle vs torque and the model of the first and the
+  last step (offset removed);
+- ``residual_vs_torque.png``: residual vs torque, loading and unloading in two colours,
+  first and last step;
+- ``residual_vs_time.png``: residual vs time, every step;
+- ``residual_spectrum.png``: stiffness test: amplitude spectrum of the residual vs
+  frequency; kinematic-error test: residual vs wave-generator angle and its order
+  spectrum;
+- ``residual_vs_rate.png``: the residual loop (unloading minus loading) per loading rate;
+- ``error_fall.png``: rms and max error per step;
+- ``index.html`` and ``index.md``: the before/after table, the ranking of every round,
+  ambiguities, whiteness and the plain-sentence findings, with the figures.
+
+Everything is written atomically; figures use matplotlib's Agg backend.
+"""
+
+from __future__ import annotations
+
+import html
+from pathlib import Path
+
+import numpy as np
+
+from hdsim.io.atomic import write_text_atomic
+from hdsim.identification.residuals import order_spectrum, views
+from hdsim.units import ARCSEC_PER_RAD
+
+__all__ = ["write_report", "FIGURES"]
+
+FIGURES = ("measured_vs_model.png", "residual_vs_torque.png", "residual_vs_time.png",
+           "residual_spectrum.png", "residual_vs_rate.png", "error_fall.png")
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _save(fig, path: Path) -> None:
+    from hdsim.plotting.locked import save
+
+    save(fig, path, dpi=110, bbox_inches="tight")
+
+
+def _label(step) -> str:
+    return "+".join(step.effects) or "base"
+
+
+def _x(meas):
+    """Angle relative to the kinematic ideal [rad] (stiffness test: the angle itself)."""
+    if meas.test == "kinematic_error":
+        return meas.kinematic_error
+    return np.asarray(meas.angle, dtype=float)
+
+
+def write_report(diagnosis, folder) -> Path:
+    """Write the figures and pages of ``diagnosis`` into ``folder``; returns index.html."""
+    plt = _plt()
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    meas = diagnosis.measurement
+    steps = diagnosis.steps
+    first, last = steps[0], steps[-1]
+    T = np.asarray(meas.torque, dtype=float)
+    t = np.asarray(meas.time, dtype=float)
+    arcsec = ARCSEC_PER_RAD
+
+    # measured vs model
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    y = _x(meas)
+    ax.plot(T, (y - first.fit.offset) * arcsec, ".", ms=2, color="0.6", label="measured")
+    for step, style in ((first, "--"), (last, "-")):
+        model = step.fit.prediction - (0 if meas.test == "stiffness" else np.asarray(meas.wg_angle) / meas.ratio)
+        ax.plot(T, (model - first.fit.offset) * arcsec, style, lw=1, label=f"model: {_label(step)}")
+    ax.set_xlabel("torque [N·m]")
+    ax.set_ylabel("angle − offset [arcsec]")
+    ax.set_title("measured vs model")
+    ax.legend(fontsize=8)
+    _save(fig, folder / FIGURES[0])
+
+    # residual vs torque by direction
+    fig, axes = plt.subplots(1, 2 if last is not first else 1, figsize=(10, 4), sharey=True, squeeze=False)
+    for ax, step in zip(axes[0], (first, last)):
+        v = views(meas, step.fit.residual)
+        r = v["residual"] * arcsec
+        ax.plot(T[v["direction"] > 0], r[v["direction"] > 0], ".", ms=2, color="tab:blue", label="loading (dT/dt > 0)")
+        ax.plot(T[v["direction"] <= 0], r[v["direction"] <= 0], ".", ms=2, color="tab:red", label="unloading (dT/dt ≤ 0)")
+        ax.axvline(0, color="0.8", lw=0.8)
+        ax.set_title(f"residual: {_label(step)}")
+        ax.set_xlabel("torque [N·m]")
+    axes[0][0].set_ylabel("residual [arcsec]")
+    axes[0][0].legend(fontsize=8, markerscale=4)
+    _save(fig, folder / FIGURES[1])
+
+    # residual vs time
+    fig, ax = plt.subplots(figsize=(10, 3.5))
+    for step in steps:
+        ax.plot(t, step.fit.residual * arcsec, lw=0.6, label=_label(step))
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("residual [arcsec]")
+    ax.legend(fontsize=8)
+    _save(fig, folder / FIGURES[2])
+
+    # spectrum
+    if meas.test == "kinematic_error":
+        fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+        wg = np.asarray(meas.wg_angle, dtype=float)
+        for step in (first, last):
+            axes[0].plot(np.mod(wg, 2 * np.pi), step.fit.residual * arcsec, ".", ms=1.5, label=_label(step))
+            orders, amp = order_spectrum(wg, step.fit.residual, max_order=8.0, n_orders=400)
+            axes[1].plot(orders, amp * arcsec, lw=0.8, label=_label(step))
+        axes[0].set_xlabel("wave-generator angle mod 2π [rad]")
+        axes[0].set_ylabel("residual [arcsec]")
+        axes[1].set_xlabel("order of the wave-generator angle")
+        axes[1].set_ylabel("amplitude [arcsec]")
+        axes[1].legend(fontsize=8)
+    else:
+        fig, ax = plt.subplots(figsize=(7, 4))
+        dt = float(np.median(np.diff(t)))
+        for step in (first, last):
+            r = step.fit.residual - np.mean(step.fit.residual)
+            spec = np.abs(np.fft.rfft(r)) * 2.0 / r.size
+            freq = np.fft.rfftfreq(r.size, dt)
+            ax.loglog(freq[1:], spec[1:] * arcsec, lw=0.7, label=_label(step))
+        ax.set_xlabel("frequency [Hz]")
+        ax.set_ylabel("residual amplitude [arcsec]")
+        ax.set_title("residual spectrum (white noise is flat)")
+        ax.legend(fontsize=8)
+    _save(fig, folder / FIGURES[3])
+
+    # loop width vs rate
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for step in steps:
+        v = views(meas, step.fit.residual)
+        rates, widths = _loop_by_rate(v)
+        ax.plot(rates, np.array(widths) * arcsec, "o-", label=_label(step))
+    ax.set_xlabel("loading rate |dT/dt| [N·m/s]")
+    ax.set_ylabel("residual loop: unloading − loading [arcsec]")
+    ax.axhline(0, color="0.8", lw=0.8)
+    ax.legend(fontsize=8)
+    _save(fig, folder / FIGURES[4])
+
+    # error fall
+    fig, ax = plt.subplots(figsize=(7, 4))
+    labels = [_label(s) for s in steps]
+    x = np.arange(len(steps))
+    ax.bar(x - 0.2, [s.fit.rmse_rad * arcsec for s in steps], 0.4, label="rms error")
+    ax.bar(x + 0.2, [s.fit.max_abs_rad * arcsec for s in steps], 0.4, label="max error")
+    floor = diagnosis.whiteness["noise_floor_rad"] * arcsec
+    ax.axhline(floor, color="k", ls=":", lw=1, label="noise floor (final residual)")
+    ax.set_xticks(x, labels, rotation=15, fontsize=8)
+    ax.set_ylabel("error [arcsec]")
+    ax.set_yscale("log")
+    ax.legend(fontsize=8)
+    _save(fig, folder / FIGURES[5])
+
+    md = _markdown(diagnosis)
+    write_text_atomic(folder / "index.md", md)
+    page = folder / "index.html"
+    write_text_atomic(page, _html(diagnosis))
+    return page
+
+
+def _loop_by_rate(v):
+    rate, direction, r = v["rate"], v["direction"], v["residual"]
+    pos = rate[rate > 0]
+    if pos.size < 10:
+        return [], []
+    levels = np.unique(np.round(np.log(pos) / 0.2))
+    out_r, out_w = [], []
+    for lv in levels:
+        m = np.abs(np.round(np.log(np.maximum(rate, 1e-300)) / 0.2) - lv) < 0.5
+        if np.count_nonzero(m) < 40:
+            continue
+        down, up = m & (direction < 0), m & (direction > 0)
+        if np.count_nonzero(down) < 10 or np.count_nonzero(up) < 10:
+            continue
+        out_r.append(float(np.median(rate[m])))
+        out_w.append(float(np.mean(r[down]) - np.mean(r[up])))
+    return out_r, out_w
+
+
+def _rows(diagnosis):
+    arcsec = ARCSEC_PER_RAD
+    rows = []
+    for row in diagnosis.table():
+        score = "" if row["score"] is None else f"{row['score']:.1f}"
+        hold = ", ".join(f"{h * arcsec:.2f}" for h in row["holdout_rmse_rad"])
+        rows.append([str(row["step"]), "+".join(row["effects"]) or "base", row["added"] or "",
+                     f"{row['rmse_rad'] * arcsec:.2f}", f"{row['max_abs_error_rad'] * arcsec:.2f}",
+                     hold, score])
+    return rows
+
+
+def _rounds(diagnosis):
+    arcsec = ARCSEC_PER_RAD
+    out = []
+    for i, step in enumerate(diagnosis.steps):
+        if not step.candidates:
+            continue
+        lines = []
+        for c in sorted(step.candidates, key=lambda c: c.score):
+            lines.append([c.family, c.effect, f"{c.score:.1f}", f"{c.fit.rmse_rad * arcsec:.2f}",
+                          f"{100 * c.pooled_holdout_gain:.0f} % ("
+                          + ", ".join(f"{100 * g:.0f} %" for g in c.holdout_gain) + ")", c.reason])
+        out.append((i + 1, "+".join(step.effects) or "base", lines))
+    return out
+
+
+TABLE_HEAD = ["step", "effects", "added", "rms [arcsec]", "max [arcsec]", "hold-out rms [arcsec]",
+              "score"]
+ROUND_HEAD = ["family", "effect", "score", "rms [arcsec]", "hold-out gain, pooled (per fold)",
+              "decision"]
+
+
+def _md_table(head, rows):
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    lines += ["| " + " | ".join(r) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def _markdown(diagnosis) -> str:
+    d = diagnosis.to_json()
+    parts = [f"# Diagnosis of {diagnosis.measurement.source}", "",
+             f"{d['test']} test, {len(diagnosis.measurement)} rows; hold-out folds by {d['holdout']}.", "",
+             f"**Verdict:** {d['verdict']}", "", "## Before and after", "",
+             _md_table(TABLE_HEAD, _rows(diagnosis)), ""]
+    for n, effects, lines in _rounds(diagnosis):
+        parts += [f"## Round {n} (model: {effects})", "", _md_table(ROUND_HEAD, lines), ""]
+    if d["ambiguous"]:
+        parts += ["## Ambiguous", ""]
+        parts += [f"- {a['families'][0]} and {a['families'][1]} explain the residual about equally "
+                  f"well; to separate them: {a['measurement']}" for a in d["ambiguous"]]
+        parts.append("")
+    parts += ["## Where the model fails", "", "Baseline:", ""]
+    parts += [f"- {s}" for s in d["findings"]["baseline"]]
+    parts += ["", "Final model:", ""]
+    parts += [f"- {s}" for s in d["findings"]["final"]]
+    w = d["whiteness"]
+    parts += ["", f"Ljung–Box Q = {w['ljung_box_q']:.1f} over {w['lags']} lags, p = {w['p_value']:.3g}; "
+              f"noise floor {w['noise_floor_rad'] * ARCSEC_PER_RAD:.2f} arcsec.", "", "## Figures", ""]
+    parts += [f"![{f}]({f})" for f in FIGURES]
+    return "\n".join(parts) + "\n"
+
+
+def _html_table(head, rows):
+    out = ["<table><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in head) + "</tr>"]
+    out += ["<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>" for r in rows]
+    return "\n".join(out) + "</table>"
+
+
+def _html(diagnosis) -> str:
+    d = diagnosis.to_json()
+    body = [f"<h1>Diagnosis of {html.escape(str(diagnosis.measurement.source))}</h1>",
+            f"<p>{d['test']} test, {len(diagnosis.measurement)} rows; hold-out folds by "
+            f"{html.escape(d['holdout'])}.</p>",
+            f"<p><b>Verdict:</b> {html.escape(d['verdict'])}</p>", "<h2>Before and after</h2>",
+            _html_table(TABLE_HEAD, _rows(diagnosis))]
+    for n, effects, lines in _rounds(diagnosis):
+        body += [f"<h2>Round {n} (model: {html.escape(effects)})</h2>", _html_table(ROUND_HEAD, lines)]
+    if d["ambiguous"]:
+        body.append("<h2>Ambiguous</h2><ul>" + "".join(
+            f"<li>{html.escape(a['families'][0])} and {html.escape(a['families'][1])}: "
+            f"{html.escape(a['measurement'])}</li>" for a in d["ambiguous"]) + "</ul>")
+    body.append("<h2>Where the model fails</h2><p>Baseline:</p><ul>" +
+                "".join(f"<li>{html.escape(s)}</li>" for s in d["findings"]["baseline"]) +
+                "</ul><p>Final model:</p><ul>" +
+                "".join(f"<li>{html.escape(s)}</li>" for s in d["findings"]["final"]) + "</ul>")
+    body.append("<h2>Figures</h2>" + "".join(f'<p><img src="{f}" alt="{f}"></p>' for f in FIGURES))
+    style = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}"
+             "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px;"
+             "font-size:90%}img{max-width:100%}")
+    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>hdsim diagnosis</title>"
+            f"<style>{style}</style></head><body>{''.join(body)}</body></html>\n")

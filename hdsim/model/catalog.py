@@ -1,0 +1,115 @@
+"""Built-in units: catalog data, assumed nominal geometry and the calibration.
+
+Calibration (documented in docs/physics.md): at the nominal geometry the closed
+forms give a structural compliance ``C_s`` and a mesh-zone compliance ``C_m``.
+``kappa_mesh`` scales ``C_m`` so that ``1/(C_s + κ C_m) = K1``; the engagement ratios
+``e_i = κ C_m / (1/K_i − C_s)`` make the three-segment law hit K2 and K3. These
+numbers are then frozen into the unit: changing a dimension later changes ``C_s``
+and ``C_m`` through the closed forms while κ and e_i stay put.
+"""
+
+from __future__ import annotations
+
+import functools
+import tomllib
+from importlib import resources
+
+import numpy as np
+
+from hdsim.model import effects as fx
+from hdsim.errors import InputError, unknown_name
+from hdsim.model.geometry import FlexsplineGeometry
+from hdsim.model.drive import Calibration, DriveData, HarmonicDrive, WaveGenerator, compliance_chain
+from hdsim.units import arcmin_to_rad
+
+
+@functools.cache
+def _data() -> dict:
+    return tomllib.loads(resources.files("hdsim").joinpath("data/units.toml").read_text())
+
+
+def unit_names() -> list[str]:
+    """Names of the built-in units, as the catalog names them."""
+    return list(_data()["units"])
+
+
+def default_unit() -> str:
+    """The unit used when none is named (CSG-25-100)."""
+    return _data()["default"]
+
+
+def catalog_entry(name: str) -> dict:
+    """Catalog data of a unit: size, ratio, rated torque [N·m], T1, T2 [N·m], K1–K3 [N·m/rad], status."""
+    units = _data()["units"]
+    if name not in units:
+        raise unknown_name("unit", name, units)
+    return dict(units[name])
+
+
+def nominal_geometry(size: float, ratio: float) -> FlexsplineGeometry:
+    """Nominal flexspline of a catalog size from the assumed proportions."""
+    data = _data()
+    d = size * 2.54e-3  # pitch diameter [m]: size = tenths of an inch
+    p = data["proportions"]
+    teeth = 2.0 * abs(ratio)  # two-lobe WG: N = z_fs / (z_cs − z_fs) with z_cs − z_fs = 2
+    module = d / teeth
+    h_pz = p["h_pz"] * d
+    return FlexsplineGeometry(
+        h_pz=h_pz, h_c=p["h_c"] * d, R_v=p["R_v"] * d, R_k=p["R_k"] * d, h_p=p["h_p"] * d,
+        R_i=0.5 * d - module - h_pz, face_width=p["face_width"] * d, cup_length=p["cup_length"] * d,
+        undercut_width=p["undercut_width"] * d, t_d=p["t_d"] * d, r_hub=p["r_hub"] * d,
+        module=module, teeth=teeth, E=data["material"]["E"], nu=data["material"]["nu"])
+
+
+def calibrate(geometry, wave_generator, K1, K2, K3):
+    """(kappa_mesh, e2, e3) that make the nominal chain reproduce K1, K2, K3."""
+    chain = compliance_chain(geometry, wave_generator, 1.0)
+    c_s, c_m = float(chain.structure), float(chain.mesh_zone)
+    if c_s >= 1.0 / K3:
+        raise InputError(f"the structural compliance alone ({c_s:.3g} rad/N·m) exceeds 1/K3: "
+                         "the nominal geometry is too soft for the catalog stiffness")
+    kappa = (1.0 / K1 - c_s) / c_m
+    e2 = kappa * c_m / (1.0 / K2 - c_s)
+    e3 = kappa * c_m / (1.0 / K3 - c_s)
+    return kappa, e2, e3
+
+
+@functools.cache
+def _build(name: str) -> HarmonicDrive:
+    data = _data()
+    entry = catalog_entry(name)
+    size, ratio = entry["size"], entry["ratio"]
+    scale = size / 25.0
+    wg_data = data["wave_generator"]
+    wave_generator = WaveGenerator(k_bearing=wg_data["k_bearing_size25"] * scale,
+                                   balls=float(round(wg_data["balls_per_size"] * size)),
+                                   engagement_fraction=wg_data["engagement_fraction"])
+    geometry = nominal_geometry(size, ratio)
+    kappa, e2, e3 = calibrate(geometry, wave_generator, entry["K1"], entry["K2"], entry["K3"])
+    bench = data["bench"]
+    J_out = bench["J_out_size25"] * scale**5
+    drive = DriveData(ratio=float(ratio), rated_torque=entry["rated_torque"],
+                      J_in=bench["J_in_size25"] * scale**5, J_out=J_out)
+    K1 = entry["K1"]
+    fxd = data["effects"]
+    ke = data["kinematic_error"]  # amplitudes: shares of the catalog accuracy class (units.toml)
+    ke_class = arcmin_to_rad(ke["accuracy_arcmin"][name])
+    kinematic_error = fx.FourierKinematicError(**{k: v * ke_class for k, v in ke["share"].items()},
+                                               **ke["phases"], load_gain=ke["load_gain"])
+    return HarmonicDrive(
+        name=name, geometry=geometry, wave_generator=wave_generator, drive=drive,
+        calibration=Calibration(kappa_mesh=kappa),
+        hardening=fx.ThreeSegmentHardening(T1=entry["T1"], T2=entry["T2"], e2=e2, e3=e3),
+        backlash=fx.DeadZoneBacklash(gap=arcmin_to_rad(fxd["backlash_arcmin"])),
+        friction=fx.DahlSlip(slip_torque=fxd["slip_torque_per_TN"] * entry["rated_torque"],
+                             slip_max=arcmin_to_rad(fxd["slip_arcmin"])),
+        damping=fx.ViscousDamping(coefficient=2.0 * bench["damping_ratio"] * np.sqrt(K1 * J_out)),
+        kinematic_error=kinematic_error,
+        provenance={"catalog": entry, "calibration": {"kappa_mesh": kappa, "e2": e2, "e3": e3},
+                    "geometry": "assumed proportions, hdsim/data/units.toml"},
+    )
+
+
+def load_unit(name: str | None = None) -> HarmonicDrive:
+    """The built-in unit ``name`` (default CSG-25-100) with its default effects."""
+    return _build(name or default_unit())

@@ -1,0 +1,222 @@
+"""The harmonic drive model: geometry, calibration, inertias and five effect slots.
+
+A `HarmonicDrive` holds parameters only. Every numeric parameter has a
+dotted name (``flexspline.h_c``, ``friction.k_h``, ``drive.J_out`` …) so studies,
+fits and the CLI's ``--set`` address them uniformly; `HarmonicDrive.with_updates`
+returns a new model and accepts arrays, giving a *batch* model that the solver
+integrates for all parameter sets at once.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields, replace
+from typing import ClassVar
+
+import numpy as np
+
+from hdsim.model import effects as fx
+from hdsim.errors import InputError, unknown_name
+from hdsim.model.geometry import FlexsplineGeometry
+from hdsim.physics import compliance as cc
+
+SLOTS = ("hardening", "backlash", "friction", "damping", "kinematic_error")
+
+
+@dataclass(frozen=True, eq=False)
+class WaveGenerator(fx.Parameters):
+    """Wave generator data that set the radial support of the teeth."""
+
+    k_bearing: float = fx.param("radial stiffness of the WG bearing per engagement zone", "N/m",
+                                positive=True)
+    balls: float = fx.param("ball count of the WG bearing", "-", 3, 200)
+    engagement_fraction: float = fx.param(
+        "circumference share of one engagement zone at light load", "-", 0.01, 0.5)
+    prefix: ClassVar[str] = "wave_generator"
+
+
+@dataclass(frozen=True, eq=False)
+class DriveData(fx.Parameters):
+    """Ratio, rating and inertias of the drive on its test bench."""
+
+    ratio: float = fx.param("transmission ratio N (output turns 1/N per WG turn)", "-", -1e4, 1e4)
+    rated_torque: float = fx.param("rated output torque T_N", "N·m", positive=True)
+    J_in: float = fx.param("inertia on the wave-generator shaft (motor + WG)", "kg·m²", positive=True)
+    J_out: float = fx.param("inertia on the output (flange + load fixture)", "kg·m²", positive=True)
+    prefix: ClassVar[str] = "drive"
+
+    def __post_init__(self):
+        super().__post_init__()
+        if np.any(np.abs(np.asarray(self.ratio)) < 1.0):
+            raise InputError("drive.ratio must be at least 1 in magnitude")
+
+
+@dataclass(frozen=True, eq=False)
+class Calibration(fx.Parameters):
+    """Per-unit calibration of the closed forms against the catalog (see docs/physics.md).
+
+    ``kappa_mesh`` multiplies the closed-form mesh-zone compliance so that the nominal
+    geometry reproduces the catalog K1. It is a property of the unit, fixed when the
+    unit is built: a change of geometry acts through the closed forms, not through it.
+    """
+
+    kappa_mesh: float = fx.param("mesh-zone compliance factor", "-", 1e-3, 1e3)
+    prefix: ClassVar[str] = "calibration"
+
+
+@dataclass(frozen=True)
+class ComplianceChain:
+    """Torsional compliances of the torque path [rad/(N·m)], output flange to mesh."""
+
+    diaphragm: np.ndarray
+    end_radius: np.ndarray
+    cylinder: np.ndarray
+    lead_radius: np.ndarray
+    undercut: np.ndarray
+    rim: np.ndarray
+    mesh_zone: np.ndarray
+
+    @property
+    def structure(self):
+        """Shell part of the chain (everything but the mesh zone)."""
+        return self.diaphragm + self.end_radius + self.cylinder + self.lead_radius + self.undercut + self.rim
+
+    @property
+    def total(self):
+        return self.structure + self.mesh_zone
+
+    def as_dict(self) -> dict:
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+
+def compliance_chain(g: FlexsplineGeometry, wg: WaveGenerator, kappa_mesh=1.0) -> ComplianceChain:
+    """The series chain of closed forms for geometry ``g`` (see `hdsim.physics.compliance`)."""
+    G = g.G
+    fillet_wall = 0.5 * (g.t_d + g.h_c)
+    undercut_wall = g.h_pz - g.h_p
+    zone_arc = wg.engagement_fraction * 2.0 * np.pi * g.R_rim
+    ball_pitch = 2.0 * np.pi * g.R_i / wg.balls
+    # Radial support of the teeth: rim spanning the balls in series with the bearing,
+    # in parallel with the cup wall holding the rim's edge.
+    k_rim = cc.rim_between_balls_stiffness(g.h_pz, g.face_width, g.E, ball_pitch, zone_arc)
+    k_cup = cc.shell_edge_radial_stiffness(g.R_c, g.h_c, g.E, g.nu, zone_arc)
+    k_radial = 1.0 / (1.0 / k_rim + 1.0 / wg.k_bearing) + k_cup
+    return ComplianceChain(
+        diaphragm=cc.annular_diaphragm(g.r_hub, g.R_c - g.R_k, g.t_d, G),
+        end_radius=cc.toroidal_fillet(g.R_k, g.R_c, fillet_wall, G),
+        cylinder=cc.thin_tube(g.cylinder_length, g.R_c, g.h_c, G),
+        lead_radius=cc.wall_transition(g.R_v, g.R_i, g.h_c, g.h_pz, G),
+        undercut=cc.thin_tube(g.undercut_width, g.R_i + 0.5 * undercut_wall, undercut_wall, G),
+        # torque enters the rim evenly over the face width: effective length b/2
+        rim=cc.thin_tube(0.5 * g.face_width, g.R_rim, g.h_pz, G),
+        mesh_zone=kappa_mesh * cc.mesh_zone(k_radial, g.pitch_radius),
+    )
+
+
+_COMPONENTS = {"flexspline": "geometry", "wave_generator": "wave_generator", "drive": "drive",
+               "calibration": "calibration"}
+
+
+@dataclass(frozen=True, eq=False)
+class HarmonicDrive:
+    """A harmonic drive: named unit, geometry, calibration, inertias and effect slots."""
+
+    name: str
+    geometry: FlexsplineGeometry
+    wave_generator: WaveGenerator
+    drive: DriveData
+    calibration: Calibration
+    hardening: fx.Effect = field(default_factory=lambda: fx.NO_EFFECT["hardening"])
+    backlash: fx.Effect = field(default_factory=lambda: fx.NO_EFFECT["backlash"])
+    friction: fx.Effect = field(default_factory=lambda: fx.NO_EFFECT["friction"])
+    damping: fx.Effect = field(default_factory=lambda: fx.NO_EFFECT["damping"])
+    kinematic_error: fx.Effect = field(default_factory=lambda: fx.NO_EFFECT["kinematic_error"])
+    provenance: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        for slot in SLOTS:
+            effect = getattr(self, slot)
+            if not isinstance(effect, fx.Effect) or effect.family != slot:
+                raise InputError(f"slot {slot} holds {type(effect).__name__}, not a {slot} effect")
+
+    # ----------------------------------------------------------- compliance
+    def compliance(self) -> ComplianceChain:
+        """The series chain of compliances [rad/(N·m)] of this geometry, calibrated."""
+        return compliance_chain(self.geometry, self.wave_generator, self.calibration.kappa_mesh)
+
+    def split(self):
+        """(structural, mesh-zone) compliance [rad/(N·m)] as used by the hardening law."""
+        chain = self.compliance()
+        return chain.structure, chain.mesh_zone
+
+    @property
+    def base_stiffness(self):
+        """Low-torque stiffness of the elastic path, 1/C_total [N·m/rad]."""
+        return 1.0 / self.compliance().total
+
+    # ----------------------------------------------------------- effects
+    def effects(self) -> dict[str, fx.Effect]:
+        """The five slots, family name to effect."""
+        return {slot: getattr(self, slot) for slot in SLOTS}
+
+    def active_families(self) -> list[str]:
+        """Families whose slot holds an effect other than "none"."""
+        return [slot for slot in SLOTS if getattr(self, slot).id != "none"]
+
+    def with_effects(self, **slots) -> "HarmonicDrive":
+        """A new model with slots replaced, e.g. ``with_effects(backlash=DeadZoneBacklash(gap=1e-4))``."""
+        for slot in slots:
+            if slot not in SLOTS:
+                raise unknown_name("effect family", slot, SLOTS)
+        return replace(self, **slots)
+
+    def without(self, *families) -> "HarmonicDrive":
+        """A new model with the named families switched to their "no effect"."""
+        return self.with_effects(**{f: fx.NO_EFFECT[f] for f in families})
+
+    # ----------------------------------------------------------- parameters
+    def _parts(self) -> dict[str, object]:
+        parts = {prefix: getattr(self, attr) for prefix, attr in _COMPONENTS.items()}
+        parts.update(self.effects())
+        return parts
+
+    def params(self) -> dict[str, float]:
+        """Every numeric parameter by dotted name."""
+        out = {}
+        for prefix, part in self._parts().items():
+            for f in fields(part):
+                if f.metadata:
+                    out[f"{prefix}.{f.name}"] = getattr(part, f.name)
+        return out
+
+    def param_info(self, name: str) -> dict:
+        """Metadata of one dotted parameter: ``doc``, ``unit`` and, where known, ``bounds``."""
+        prefix, _, attr = name.partition(".")
+        part = self._parts().get(prefix)
+        for f in fields(part) if part is not None else ():
+            if f.name == attr and f.metadata:
+                return dict(f.metadata)
+        raise unknown_name("parameter", name, self.params())
+
+    def with_updates(self, updates: dict) -> "HarmonicDrive":
+        """A new model with ``{dotted name: value}`` changed; values may be arrays (a batch)."""
+        known = self.params()
+        grouped: dict[str, dict] = {}
+        for name, value in updates.items():
+            if name not in known:
+                raise unknown_name("parameter", name, known)
+            prefix, _, attr = name.partition(".")
+            grouped.setdefault(prefix, {})[attr] = value
+        changes = {}
+        for prefix, values in grouped.items():
+            attr = _COMPONENTS.get(prefix, prefix)
+            changes[attr] = replace(getattr(self, attr), **values)
+        return replace(self, **changes)
+
+    @property
+    def batch_size(self) -> int:
+        """1 for a single model, else the common length of its array parameters."""
+        sizes = {np.size(v) for v in self.params().values()}
+        sizes.discard(1)
+        if len(sizes) > 1:
+            raise InputError(f"batch parameters have different lengths {sorted(sizes)}")
+        return sizes.pop() if sizes else 1

@@ -1,0 +1,69 @@
+"""Figures of a driven-wave-generator run (matplotlib, Agg-safe).
+
+Like `hdsim.plotting.locked` for the locked bench: each function takes a
+`hdsim.scenarios.run.Run` (sample 0 of a batch) and an optional axes and returns the
+figure. Angles at the output in arcsec (deviations) or degrees, torques in N·m.
+"""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg", force=False)
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from hdsim.plotting.locked import _axes  # noqa: E402
+from hdsim.units import rad_to_arcsec  # noqa: E402
+
+
+def _ratio(run) -> float:
+    return float(np.atleast_1d(np.asarray(run.model.drive.ratio, dtype=float))[0])
+
+
+def plot_deviation(run, ax=None, sample: int = 0):
+    """Deviation θ_out − θ_WG/N against output angle over the measured passes (or against time)."""
+    fig, ax = _axes(ax, figsize=(8.0, 4.0))
+    s, t = run.result.signals, run.result.t
+    windows = run.result.metadata.get("windows", {})
+    N = _ratio(run)
+    passes = [w for w in ("forward", "reverse", "constant") if w in windows]
+    deviation = rad_to_arcsec(s["deviation_rad"][sample])
+    if passes:
+        for name, colour in zip(passes, ("C0", "C3", "C0")):
+            a, b = windows[name]
+            m = (t >= a) & (t <= b)
+            ax.plot(np.rad2deg(s["wg_angle_rad"][sample, m] / N), deviation[m], colour, lw=0.6, label=name)
+        ax.set_xlabel("output angle [deg]")
+        ax.legend(fontsize=8)
+    else:
+        ax.plot(t, deviation, "C0", lw=0.7)
+        ax.set_xlabel("time [s]")
+    ax.set_ylabel("θ_out − θ_WG/N [arcsec]")
+    ax.set_title(f"{run.model.name}: {run.scenario.name}")
+    ax.grid(alpha=0.3)
+    return fig
+
+
+def plot_driven_time(run, sample: int = 0):
+    """Angles, deviation and following error, torques against time."""
+    s, t = run.result.signals, run.result.t
+    N = _ratio(run)
+    fig, axes = plt.subplots(3, 1, figsize=(8.0, 7.0), sharex=True, layout="constrained")
+    axes[0].plot(t, np.rad2deg(s["output_angle_rad"][sample]), "C0", label="output")
+    axes[0].plot(t, np.rad2deg(s["reference_angle_rad"][sample] / N), "k--", lw=0.8, label="command / N")
+    axes[0].set_ylabel("angle [deg]")
+    axes[1].plot(t, rad_to_arcsec(s["output_angle_rad"][sample] - s["reference_angle_rad"][sample] / N), "C3",
+                 lw=0.7, label="output − command/N")
+    axes[1].plot(t, rad_to_arcsec(s["deviation_rad"][sample]), "C0", lw=0.7, label="output − WG/N")
+    axes[1].set_ylabel("[arcsec]")
+    axes[2].plot(t, s["drive_torque_Nm"][sample], "C0", lw=0.7, label="drive torque")
+    axes[2].plot(t, s["load_torque_Nm"][sample], "C2", lw=0.8, label="load torque")
+    axes[2].plot(t, N * s["motor_torque_Nm"][sample], "C1", lw=0.8, label="motor torque × N")
+    axes[2].set_ylabel("[N·m]")
+    axes[2].set_xlabel("time [s]")
+    for axis in axes:
+        axis.legend(fontsize=8)
+        axis.grid(alpha=0.3)
+    axes[0].set_title(f"{run.model.name}: {run.scenario.name}")
+    return fig

@@ -1,0 +1,71 @@
+"""Figures of a locked-wave-generator run (matplotlib, Agg-safe).
+
+Each function takes a `hdsim.scenarios.run.Run` (sample 0 of a batch) and an optional
+axes, and returns the figure, so notebooks and the CLI share one code path.
+Angles are shown in arcmin, torques in N·m.
+"""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg", force=False)
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from hdsim.units import rad_to_arcmin  # noqa: E402
+
+
+def _axes(ax, figsize=(6.4, 4.2)):
+    if ax is None:
+        fig, ax = plt.subplots(figsize=figsize, layout="constrained")
+        return fig, ax
+    return ax.figure, ax
+
+
+def plot_loop(run, ax=None, window_fraction: float = 0.04, sample: int = 0):
+    """Torque against twist (the hysteresis loop), with the ±4 % T_N window shaded."""
+    fig, ax = _axes(ax)
+    torque = run.result.signal("torque_Nm", sample)
+    twist = rad_to_arcmin(run.result.signal("twist_rad", sample))
+    rated = float(np.asarray(run.model.drive.rated_torque).reshape(-1)[sample])
+    ax.plot(twist, torque, lw=1.2, color="C0", label=f"{run.model.name}: {run.scenario.name}")
+    window = window_fraction * rated
+    ax.axhspan(-window, window, color="C1", alpha=0.15, label=f"±{window_fraction:.0%} T_N")
+    if "lost_motion_arcmin" in run.metrics:
+        ax.set_title(f"lost motion {run.metric('lost_motion_arcmin', sample):.3f} arcmin "
+                     f"(±{window_fraction:.0%} T_N, full span)")
+    elif "K1_Nm_per_rad" in run.metrics:
+        ax.set_title(f"K1 {run.metric('K1_Nm_per_rad', sample):.3g}, K2 {run.metric('K2_Nm_per_rad', sample):.3g}, "
+                     f"K3 {run.metric('K3_Nm_per_rad', sample):.3g} N·m/rad")
+    ax.axhline(0, color="0.6", lw=0.6)
+    ax.axvline(0, color="0.6", lw=0.6)
+    ax.set_xlabel("twist [arcmin]")
+    ax.set_ylabel("output torque [N·m]")
+    ax.legend(loc="upper left", fontsize="small")
+    ax.grid(alpha=0.3)
+    return fig
+
+
+def plot_time(run, sample: int = 0):
+    """Torque and twist against time, one above the other."""
+    fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(6.4, 4.8), layout="constrained")
+    t = run.result.t
+    top.plot(t, run.result.signal("torque_Nm", sample), color="C0")
+    top.set_ylabel("torque [N·m]")
+    bottom.plot(t, rad_to_arcmin(run.result.signal("twist_rad", sample)), color="C2")
+    bottom.set_ylabel("twist [arcmin]")
+    bottom.set_xlabel("time [s]")
+    for ax in (top, bottom):
+        ax.grid(alpha=0.3)
+    top.set_title(f"{run.model.name}: {run.scenario.name}")
+    return fig
+
+
+def save(fig, path, dpi: int = 120, **savefig_options) -> None:
+    """Save a figure atomically (format from the suffix) and close it."""
+    from hdsim.io.atomic import atomic_path
+
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=dpi, format=str(path).rsplit(".", 1)[-1], **savefig_options)
+    plt.close(fig)

@@ -1,0 +1,78 @@
+"""Scenario tables of the ``driven_wave_generator`` set-up (registered in `hdsim.scenarios.scenario`).
+
+Kept apart from `hdsim.simulation.driven` so that the scenario module can import the
+schema without importing the simulator. Values are checked for type by
+`hdsim.scenarios.scenario`; their meaning and ranges by `hdsim.simulation.driven.bench_from_scenario`.
+Switches are strings (the scenario schema has no booleans). See
+``docs/tutorial-kinematic-error.md`` for every key.
+"""
+
+DRIVEN_SCHEMA = {
+    "input": {
+        "mode": str,                 # prescribed | pi
+        "profile": str,              # hold | constant | reversal | trapezoid | sine | csv
+        "speed_rpm": float,          # WG cruise speed (constant, reversal, trapezoid)
+        "ramp_s": float,             # speed ramp time (cosine; linear for trapezoid)
+        "output_revolutions": float,  # measured output revolutions at cruise (each way)
+        "settle_revolutions": float,  # cruise travel before the measured part
+        "dwell_s": float,            # standstill between moves / after a reversal
+        "hold_s": float,             # duration of a hold profile (if the load does not set it)
+        "move_deg": float,           # trapezoid: output move [deg]
+        "return": str,               # trapezoid: "yes" moves back after the dwell
+        "amplitude_deg": float,      # sine: output amplitude [deg]
+        "frequency_Hz": float,       # sine
+        "cycles": float,             # sine
+        "csv": str,                  # csv: measured profile, path relative to the scenario file
+    },
+    "load": {
+        "profile": str,              # none | constant | opposing | step | sweep | csv
+        "torque": float,             # fraction of T_N (constant: signed; opposing: magnitude)
+        "ramp_s": float,             # ramp-in of the initial load
+        "step_time_s": float,
+        "step_to": float,            # fraction of T_N after the step
+        "rise_s": float,             # step rise time
+        "sweep_amplitude": float,    # fraction of T_N
+        "f_start_Hz": float,
+        "f_stop_Hz": float,
+        "sweep_s": float,
+        "settle_s": float,           # rest at the preload before the sweep
+        "tail_s": float,             # rest after the sweep (response decays)
+        "smoothing": float,          # opposing: sign switch over this fraction of the cruise speed
+        "inertia": float,            # load inertia added to the output [kg m^2]
+    },
+    "controller": {
+        "bandwidth_Hz": float,       # speed-loop crossover
+        "kp": float,                 # N m s/rad on WG speed error (overrides the tuning)
+        "ki": float,                 # N m/rad on the integral of the WG speed error
+        "feedforward": str,          # "yes" | "no": acceleration feedforward J_total * alpha_ref
+        "position_loop": str,        # "yes" | "no": outer position loop (gain = crossover / 6)
+        "position_gain_per_s": float,  # outer position-loop gain (overrides the tuning)
+    },
+    "input_friction": {
+        "model": str,                # catalog | none
+        "starting_torque_Nm": float,
+        "running_torque_Nm": float,  # no-load running torque at 2000 rpm input
+        "coulomb_share": float,
+        "stribeck_speed_rpm": float,
+        "viscous_Nms": float,
+        "ripple_orders": list,
+        "ripple_amplitudes": list,
+        "ripple_phases": list,
+    },
+    "linearise": {
+        "load": float,               # operating-point load, fraction of T_N
+        "f_min_Hz": float,           # frequency-response check from here (default 1.5 x the sweep start)
+        "compare_below": float,      # frequency-response check up to this fraction of the first resonance
+    },
+    "analysis": {
+        "settle_band_arcsec": float,
+        "orders": list,              # WG orders reported by the order spectrum (besides 1/N)
+    },
+    "output": {
+        "samples_per_segment": int,  # accepted for compatibility; unused by this set-up
+        "samples_per_wg_rev": int,
+        "sample_rate_Hz": float,
+    },
+}
+
+DRIVEN_REQUIRED = {"input": ("mode", "profile")}

@@ -1,0 +1,212 @@
+"""Scenarios: TOML data describing a bench test, and the pure profile they imply.
+
+A locked-wave-generator scenario (stiffness and lost-motion tests) is::
+
+    name = "lost_motion"
+    description = "..."
+    setup = "locked_wave_generator"
+    metrics = ["lost_motion"]
+
+    [load]            # torque on the output, in fractions of the rated torque T_N
+    amplitude = 0.04  # peak |T| / T_N
+    cycles = 2        # levels: 0, +A, -A, (+A, -A) x (cycles-1), 0
+    rate = 0.04       # mean loading rate [T_N per second]
+
+    [output]
+    samples_per_segment = 100
+
+Any value can be overridden with ``--set scenario.load.rate=0.1``.
+"""
+
+from __future__ import annotations
+
+import copy
+import tomllib
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from hdsim.scenarios.driven_schema import DRIVEN_REQUIRED, DRIVEN_SCHEMA
+from hdsim.errors import InputError, unknown_name
+from hdsim.scenarios.profiles import cosine_ramps, segment_times
+
+_COMMON = {
+    "name": str, "description": str, "setup": str, "metrics": list,
+    "output": {"samples_per_segment": int},
+    "solver": {"method": str, "rtol": float, "atol_scale": float, "max_step": float},
+}
+
+#: tables each bench set-up adds to the common schema; required keys are listed in
+#: ``_REQUIRED`` (a new set-up registers both here and a runner in hdsim.scenarios.run)
+SETUP_SCHEMAS = {
+    "locked_wave_generator": {"load": {"amplitude": float, "cycles": int, "rate": float}},
+    "driven_wave_generator": DRIVEN_SCHEMA,
+}
+_REQUIRED = {
+    "locked_wave_generator": {"load": ("amplitude", "cycles", "rate")},
+    "driven_wave_generator": DRIVEN_REQUIRED,
+}
+SETUPS = tuple(SETUP_SCHEMAS)
+
+
+def schema_for(setup: str) -> dict:
+    return {**_COMMON, **SETUP_SCHEMAS.get(setup, {})}
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A validated scenario; ``data`` is the TOML table (kept for provenance)."""
+
+    data: dict
+    source: str = "<dict>"
+
+    def __post_init__(self):
+        # validation coerces values in place: work on our own copy, never the caller's dict
+        object.__setattr__(self, "data", copy.deepcopy(self.data))
+        if not isinstance(self.data.get("name"), str):
+            raise InputError(f"{self.source}: missing 'name'")
+        if self.setup not in SETUP_SCHEMAS:
+            raise unknown_name(f"setup in {self.source}", self.setup, SETUPS)
+        _validate(self.data, schema_for(self.setup), self.source, "")
+        for table, keys in _REQUIRED[self.setup].items():
+            for key in keys:
+                if key not in self.data.get(table, {}):
+                    raise InputError(f"{self.source}: missing {table}.{key}")
+        if self.setup == "locked_wave_generator":
+            load = self.data["load"]
+            if not 0.0 < load["amplitude"] <= 5.0:
+                raise InputError(f"{self.source}: load.amplitude must be in (0, 5] (fraction of T_N)")
+            if load["cycles"] < 1 or load["rate"] <= 0:
+                raise InputError(f"{self.source}: load.cycles must be >= 1 and load.rate > 0")
+
+    @property
+    def name(self) -> str:
+        return self.data["name"]
+
+    @property
+    def setup(self) -> str:
+        return self.data.get("setup", "locked_wave_generator")
+
+    @property
+    def metrics(self) -> list[str]:
+        return list(self.data.get("metrics", []))
+
+    @property
+    def samples_per_segment(self) -> int:
+        return int(self.data.get("output", {}).get("samples_per_segment", 100))
+
+    def levels(self) -> np.ndarray:
+        """Torque waypoints as fractions of T_N: 0, +A, −A, …, 0."""
+        load = self.data["load"]
+        amplitude = load["amplitude"]
+        return np.array([0.0] + [amplitude, -amplitude] * load["cycles"] + [0.0])
+
+    def times(self) -> np.ndarray:
+        return segment_times(self.levels(), self.data["load"]["rate"])
+
+    def torque_profile(self, rated_torque):
+        """Applied output torque [N·m] as a function of time; per sample if T_N is an array."""
+        shape = cosine_ramps(self.times(), self.levels())
+        scale = np.asarray(rated_torque, dtype=float)
+        return lambda t: shape(t) * scale
+
+    def sample_times(self, samples_per_segment: int | None = None) -> np.ndarray:
+        """Output times: ``samples_per_segment`` per ramp, waypoints included exactly."""
+        n = samples_per_segment or self.samples_per_segment
+        times = self.times()
+        parts = [np.linspace(a, b, n, endpoint=False) for a, b in zip(times[:-1], times[1:])]
+        return np.concatenate(parts + [times[-1:]])
+
+    def with_updates(self, updates: dict) -> "Scenario":
+        """A new scenario with ``{"load.rate": 0.1, ...}`` applied (dotted keys)."""
+        data = copy.deepcopy(self.data)
+        full = schema_for(self.setup)
+        for key, value in updates.items():
+            *path, leaf = key.split(".")
+            table = data
+            schema = full
+            for part in path:
+                if part not in schema or not isinstance(schema[part], dict):
+                    raise unknown_name("scenario key", key, _flat_keys(full))
+                schema = schema[part]
+                table = table.setdefault(part, {})
+            if leaf not in schema or isinstance(schema[leaf], dict):
+                raise unknown_name("scenario key", key, _flat_keys(full))
+            table[leaf] = _coerce(value, schema[leaf], key, self.source)
+        return Scenario(data, self.source)
+
+
+def _flat_keys(schema, prefix=""):
+    for key, value in schema.items():
+        if isinstance(value, dict):
+            yield from _flat_keys(value, f"{prefix}{key}.")
+        else:
+            yield f"{prefix}{key}"
+
+
+def _coerce(value, kind, key, source):
+    if kind is float and isinstance(value, (int, float)) and not isinstance(value, bool):
+        return float(value)
+    if kind is int and isinstance(value, int) and not isinstance(value, bool):
+        return value
+    if kind is float and isinstance(value, str):
+        try:
+            return float(value)
+        except ValueError:
+            pass
+    if kind is int and isinstance(value, str) and value.strip().lstrip("-").isdigit():
+        return int(value)
+    if kind in (str, list) and isinstance(value, kind):
+        return value
+    raise InputError(f"{source}: {key} must be {kind.__name__}, got {value!r}")
+
+
+def _validate(table, schema, source, prefix):
+    for key, value in table.items():
+        name = prefix + key
+        if key not in schema:
+            raise unknown_name(f"key in {source}", name, [prefix + k for k in schema])
+        if isinstance(schema[key], dict):
+            if not isinstance(value, dict):
+                raise InputError(f"{source}: [{name}] must be a table")
+            _validate(value, schema[key], source, name + ".")
+        else:
+            table[key] = _coerce(value, schema[key], name, source)
+
+
+def read_toml(path, kind: str = "TOML") -> dict:
+    """A TOML file as a dict; one-line `InputError` naming the file on any problem."""
+    path = Path(path)
+    try:
+        return tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise InputError(f"{path}: {kind} file not found") from None
+    except IsADirectoryError:
+        raise InputError(f"{path}: is a directory, expected a {kind} .toml file") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: not valid TOML: {exc}") from None
+
+
+def load_scenario(path) -> Scenario:
+    """Read and validate a scenario TOML file; one-line `InputError` on any problem."""
+    return Scenario(read_toml(path, "scenario"), str(path))
+
+
+def builtin_scenario_path(name: str) -> Path:
+    """The scenario file ``NAME.toml`` shipped inside the package (``hdsim/data/scenarios``).
+
+    The checkout's ``scenarios/`` folder holds the same files for reading and copying.
+    """
+    folder = Path(str(resources.files("hdsim").joinpath("data", "scenarios")))
+    candidate = folder / f"{name}.toml"
+    if candidate.is_file():
+        return candidate
+    raise unknown_name("built-in scenario", name, builtin_scenario_names())
+
+
+def builtin_scenario_names() -> list[str]:
+    """Names of the scenario files shipped inside the package."""
+    folder = Path(str(resources.files("hdsim").joinpath("data", "scenarios")))
+    return sorted(p.stem for p in folder.glob("*.toml"))
