@@ -3,7 +3,7 @@
     python docs/make_first_simulation_figures.py        # about 10 s
 
 The script uses only the public API shown in the tutorial (load_unit, with_updates,
-load_scenario, run_scenario, plot_loop, plot_time, write_result, read_result) and
+load_scenario, run_scenario, plot_loop, plot_time, Run.save, read_run) and
 prints the numbers the tutorial quotes.
 """
 
@@ -19,8 +19,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 from hdsim.model.catalog import load_unit  # noqa: E402
 from hdsim.plotting.locked import plot_loop, plot_time  # noqa: E402
-from hdsim.io.results import read_result, write_result  # noqa: E402
-from hdsim.scenarios.run import run_scenario  # noqa: E402
+from hdsim.scenarios.run import read_run, run_scenario  # noqa: E402
 from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario  # noqa: E402
 from hdsim.units import rad_to_arcmin  # noqa: E402
 
@@ -74,16 +73,16 @@ def main() -> None:
 
     # 3. write the result to HDF5 and read it back
     with tempfile.TemporaryDirectory() as tmp:
-        path = write_result(Path(tmp) / "lost_motion.h5", lm_run)
-        stored = read_result(path)
+        path = lm_run.save(Path(tmp) / "lost_motion.h5")
+        stored = read_run(path)
     print("metrics from file:", {k: float(v[0]) for k, v in stored.metrics.items()})
-    print("effects from file:", stored.effects)
+    print("effects from file:", {k: e.id for k, e in stored.model.effects().items()})
     t = stored.result.t
     fig, ax = plt.subplots(figsize=(6.4, 3.6), layout="constrained")
     ax.plot(t, rad_to_arcmin(stored.result.signal("twist_rad")), label="twist (total)")
     ax.plot(t, rad_to_arcmin(stored.result.signal("friction.slip")), label="micro-slip state friction.slip")
     ax.set(xlabel="time [s]", ylabel="[arcmin]",
-           title=f"read back from HDF5: {stored.attrs['scenario']} on {stored.attrs['unit']}")
+           title=f"read back from HDF5: {stored.scenario.name} on {stored.model.name}")
     ax.grid(alpha=0.3)
     ax.legend(fontsize="small")
     save(fig, "first_sim_readback.png")

@@ -19,7 +19,8 @@ import numpy as np  # noqa: E402
 
 from hdsim.scenarios import ke_metrics  # noqa: E402
 from hdsim.model.catalog import load_unit  # noqa: E402
-from hdsim.simulation.driven import bench_from_scenario, linear_model, linear_summary  # noqa: E402
+from hdsim.scenarios.driven import bench_from_scenario  # noqa: E402
+from hdsim.simulation.linearize import linear_model, linear_summary  # noqa: E402
 from hdsim.scenarios.run import run_scenario  # noqa: E402
 from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario  # noqa: E402
 from hdsim.units import rad_to_arcsec  # noqa: E402

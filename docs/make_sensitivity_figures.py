@@ -12,12 +12,14 @@ import argparse
 from pathlib import Path
 
 import numpy as np
+from matplotlib.figure import Figure
 
+from hdsim.plotting import save_figure
+from hdsim.plotting.sensitivity import plot_convergence, plot_indices
 from hdsim.sensitivity import Ishigami, Linear, run_study
 from hdsim.sensitivity.analysis import analyse
 from hdsim.sensitivity.design import replicate_seed, sample_replicate
 from hdsim.sensitivity.evaluate import evaluate
-from hdsim.plotting.sensitivity import _pyplot, _save, plot_convergence, plot_indices
 
 FIGURES = Path(__file__).resolve().parent / "figures"
 
@@ -43,8 +45,8 @@ def pairing() -> None:
     order = np.random.default_rng(0).permutation(int(np.ceil(len(X) / 100)))
     perm = np.concatenate([np.arange(c * 100, min(c * 100 + 100, len(X))) for c in order])
     wrong = analyse(p, X, ev.y[perm], second_order=False, replicates=R)  # keys withheld
-    plt = _pyplot()
-    fig, axes = plt.subplots(1, 2, figsize=(8.5, 3.2), sharey=True)
+    fig = Figure(figsize=(8.5, 3.2))
+    axes = fig.subplots(1, 2, sharey=True)
     x = np.arange(p.num_vars)
     for ax, res, title in ((axes[0], right, "rows matched by index"),
                            (axes[1], wrong, "chunks in completion order")):
@@ -56,7 +58,8 @@ def pairing() -> None:
                      fontsize=9)
     axes[0].set_ylabel("index [-]")
     axes[0].legend(fontsize=8, frameon=False)
-    _save(fig, FIGURES / "sobol_pairing.png")
+    fig.tight_layout()
+    save_figure(fig, FIGURES / "sobol_pairing.png")
 
 
 def flexspline() -> None:

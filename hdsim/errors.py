@@ -19,7 +19,22 @@ class SolverError(RuntimeError):
 
 
 def unknown_name(kind: str, name: str, known) -> InputError:
-    """An `InputError` for an unknown ``name``, suggesting close matches."""
+    """An `InputError` for an unknown ``name``, suggesting close matches.
+
+    Parameters
+    ----------
+    kind : str
+        What was named, for the message (``'distribution'``, ``'unit'``, ...).
+    name : str
+        The unknown name.
+    known : iterable of str
+        The accepted names.
+
+    Returns
+    -------
+    InputError
+        The error to raise: ``unknown KIND 'NAME'; did you mean ...?`` or the known names.
+    """
     known = sorted(known)
     close = difflib.get_close_matches(name, known, n=3, cutoff=0.5)
     hint = f"; did you mean {', '.join(close)}?" if close else f"; known: {', '.join(known)}"

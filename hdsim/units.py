@@ -9,6 +9,15 @@ ARCSEC_PER_RAD = 648000.0 / math.pi
 DEG_PER_RAD = 180.0 / math.pi
 RAD_PER_S_PER_RPM = 2.0 * math.pi / 60.0
 
+#: Angle units a file column name may end in (``angle_deg``, ``wg_angle_arcsec``), and
+#: the size of one such unit [rad].
+ANGLE_UNITS: dict[str, float] = {
+    "rad": 1.0,
+    "deg": math.pi / 180.0,
+    "arcmin": math.pi / (180.0 * 60.0),
+    "arcsec": math.pi / (180.0 * 3600.0),
+}
+
 
 def rad_to_arcmin(x):
     """[rad] → [arcmin]"""

@@ -1,8 +1,6 @@
 """The study interface: batched rows equal single runs; bad rows become NaN."""
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -46,13 +44,12 @@ def test_names_resolve_and_unknown_names_are_refused():
         model_function("CSG-25-100", ["h_c"], "speed_of_light")
 
 
-def test_sobol_cli_on_the_simulator(tmp_path):
-    p = subprocess.run([sys.executable, "-m", "hdsim", "sobol", "--unit", "CSG-25-100", "--params",
-                        "h_pz,h_c,R_v", "--range", "10%", "--output", "lost_motion_arcmin", "--n", "32",
-                        "--workers", "1", "--out", str(tmp_path / "s.h5"), "--json"],
-                       capture_output=True, text=True, timeout=600)
-    assert p.returncode == 0, p.stderr
-    data = json.loads(p.stdout)
+def test_sobol_cli_on_the_simulator(tmp_path, cli):
+    code, stdout, err = cli("sobol", "--unit", "CSG-25-100", "--params", "h_pz,h_c,R_v", "--range", "10%",
+                            "--output", "lost_motion_arcmin", "--n", "32", "--workers", "1",
+                            "--out", tmp_path / "s.h5", "--json")
+    assert code == 0, err
+    data = json.loads(stdout)
     assert data["evaluations"] == 32 * (3 + 2)
     assert {"S1", "S1_conf", "ST", "ST_conf", "seconds", "study", "params", "n", "output"} <= set(data)
     assert max(data["ST"], key=data["ST"].get) == "h_pz"  # the rim under the teeth leads

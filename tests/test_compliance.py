@@ -38,12 +38,33 @@ def test_transition_between_equal_walls_is_a_tube():
         cc.thin_tube(2e-3, 30.3e-3, 0.6e-3, G), rel=1e-12)
 
 
-def test_chain_is_a_series_sum_and_sets_the_base_stiffness():
+def test_chain_terms_are_the_closed_forms_of_the_unit_geometry():
+    """Three terms of the chain recomputed by hand from the geometry (formulas written out
+    here, not the library's): the cylinder and the rim as thin tubes, the diaphragm as an
+    annulus between the hub and the start of the end radius."""
     model = load_unit()
-    chain = model.compliance()
-    parts = [v for k, v in chain.as_dict().items()]
-    assert chain.total == pytest.approx(sum(parts), rel=5e-3)
-    assert model.base_stiffness == pytest.approx(1.0 / sum(parts), rel=5e-3)
+    g, chain = model.geometry, model.compliance()
+    Gm = g.E / (2 * (1 + g.nu))
+    R_c, R_rim = g.R_i + g.h_c / 2, g.R_i + g.h_pz / 2
+    L_cyl = g.cup_length - g.R_k - g.R_v - g.undercut_width - g.face_width
+    assert float(chain.cylinder) == pytest.approx(L_cyl / (2 * np.pi * Gm * R_c**3 * g.h_c), rel=1e-12)
+    assert float(chain.rim) == pytest.approx(g.face_width / 2 / (2 * np.pi * Gm * R_rim**3 * g.h_pz), rel=1e-12)
+    ri, ro = g.r_hub, R_c - g.R_k
+    assert float(chain.diaphragm) == pytest.approx((1 / ri**2 - 1 / ro**2) / (4 * np.pi * Gm * g.t_d), rel=1e-12)
+
+
+def test_a_longer_cylinder_adds_exactly_its_tube_compliance():
+    """Series chain: lengthening the cup by ΔL lengthens only the plain cylinder, so
+    1/K grows by the thin-tube compliance of ΔL, ΔL/(2π G R_c³ h_c), and nothing else."""
+    model = load_unit()
+    g = model.geometry
+    dL = 0.1 * g.cup_length
+    longer = model.with_updates({"flexspline.cup_length": g.cup_length + dL})
+    Gm = g.E / (2 * (1 + g.nu))
+    R_c = g.R_i + g.h_c / 2
+    added = 1 / float(longer.base_stiffness) - 1 / float(model.base_stiffness)
+    assert added == pytest.approx(dL / (2 * np.pi * Gm * R_c**3 * g.h_c), rel=1e-9)
+    assert added > 0.01 / float(model.base_stiffness)  # a visible change, not round-off
 
 
 def test_tube_alone_is_several_times_stiffer_than_the_catalog():

@@ -4,7 +4,7 @@ The truth generators share no code and no functional forms with the library (Bou
 against Dahl, cubic/sinh against tanh hardening, a smooth series dead zone against the
 library's rounded one, constant-damping-ratio damping against the library's constant plus
 stiffness-proportional coefficient). The default run keeps a few representative cases on
-short records; the battery with the rates of the done-when list is ``-m slow`` (see
+short records (600–1000 rows); the battery with the rates of the done-when list is ``-m slow`` (see
 ``docs/tutorial-find-missing-effect.md`` for its figures).
 """
 
@@ -20,6 +20,7 @@ import truth
 from hdsim.cli import main
 from hdsim.identification.diagnosis import diagnose, folds
 from hdsim.io.measurement import make_measurement
+from hdsim.units import ARCSEC_PER_RAD
 
 CONTRACT_KEYS = {"test", "baseline", "ranking", "added", "final", "ambiguous"}
 
@@ -77,7 +78,7 @@ def test_folds_split_one_rate_by_halves_and_ke_by_blocks():
 
 
 def test_hidden_hardening_is_found_and_the_error_falls():
-    meas, _ = stiffness(("hardening",), ("friction",), 1, n_rows=1000)
+    meas, _ = stiffness(("hardening",), ("friction",), 1, n_rows=600)
     d = diagnose(meas, "friction")
     j = d.to_json()
     check_contract(j)
@@ -89,7 +90,7 @@ def test_hidden_hardening_is_found_and_the_error_falls():
 
 
 def test_nothing_hidden_adds_nothing():
-    meas, _ = stiffness((), ("hardening", "friction"), 3, n_rows=1000)
+    meas, _ = stiffness((), ("hardening", "friction"), 3, n_rows=600)
     j = diagnose(meas, "hardening,friction").to_json()
     check_contract(j)
     assert j["added"] == []
@@ -104,21 +105,30 @@ def test_effect_outside_the_library_is_not_reported_as_success():
     assert "not white" in j["verdict"] and "not a success" in j["verdict"]
 
 
-def test_cli_diagnose_json_and_report(tmp_path, capsys, monkeypatch):
+def test_cli_diagnose_json_and_report(tmp_path, capsys, monkeypatch, png_image):
     cols, tr = truth.make_stiffness_data({"damping"}, {"friction"}, seed=1, n_rows=900)
     truth.write_csv(tmp_path / "bench.csv", cols, tr["meta"])
     monkeypatch.chdir(tmp_path)
-    code = main(["diagnose", "bench.csv", "--effects", "friction", "--report", "rep", "--json"])
+    # one round is enough for the contract and the report (the discovery tests above run
+    # the procedure to its end)
+    code = main(["diagnose", "bench.csv", "--effects", "friction", "--report", "rep", "--max-rounds", "1",
+                 "--json"])
     out = capsys.readouterr()
     assert code == 0
     j = json.loads(out.out)
     check_contract(j)
     assert j["added"][:1] == ["damping"]
-    for name in ("index.html", "index.md", "measured_vs_model.png", "residual_vs_torque.png",
-                 "residual_vs_time.png", "residual_spectrum.png", "error_fall.png"):
-        assert (tmp_path / "rep" / name).stat().st_size > 500
+    figures = ("measured_vs_model.png", "residual_vs_torque.png", "residual_vs_time.png",
+               "residual_spectrum.png", "error_fall.png")
     page = (tmp_path / "rep" / "index.md").read_text()
+    html = (tmp_path / "rep" / "index.html").read_text()
+    for name in figures:
+        png_image(tmp_path / "rep" / name)
+        assert name in page and name in html  # every figure is shown on both pages
     assert "Before and after" in page and "damping" in page
+    # the page's table reports the numbers of the JSON: baseline and final rms error [arcsec]
+    for step in ("baseline", "final"):
+        assert f"{j[step]['rmse_rad'] * ARCSEC_PER_RAD:.2f}" in page
 
 
 # --------------------------------------------------------------------------- battery (slow)

@@ -2,8 +2,9 @@
 
 The build renders every page, the API reference from the docstrings (mkdocstrings) and
 checks every link, anchor and image, so a renamed function, a broken cross-reference or
-a figure that was not regenerated fails here. About 5 s; skipped with a clear reason
-when the docs tool chain (``pip install -e ".[docs]"``) is not installed.
+a figure that was not regenerated fails here (a few seconds; no time limit is asserted:
+speed belongs in benchmarks/). Skipped with a clear reason when the docs tool chain
+(``pip install -e ".[docs]"``) is not installed.
 """
 
 from __future__ import annotations
@@ -13,7 +14,6 @@ import os
 import re
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -41,19 +41,16 @@ def test_mkdocs_build_strict_has_no_warnings(tmp_path):
         pytest.skip(f"docs tool chain not installed ({', '.join(missing)}); "
                     "install it with: pip install -e '.[docs]'")
     env = dict(os.environ, NO_MKDOCS_2_WARNING="1", PYTHONPATH=str(ROOT))
-    start = time.perf_counter()
     proc = subprocess.run(
         [sys.executable, "-m", "mkdocs", "build", "--strict", "--clean",
          "--config-file", str(ROOT / "mkdocs.yml"), "--site-dir", str(tmp_path / "site")],
         cwd=ROOT, env=env, capture_output=True, text=True, timeout=300)
-    seconds = time.perf_counter() - start
     log = proc.stdout + proc.stderr
     warnings = [line for line in log.splitlines() if re.match(r"\s*(WARNING|ERROR)\b", line)]
     assert proc.returncode == 0 and not warnings, (
         f"mkdocs build --strict failed (exit {proc.returncode}):\n" + "\n".join(warnings or [log[-3000:]]))
     assert (tmp_path / "site" / "index.html").is_file()
     assert (tmp_path / "site" / "api" / "index.html").is_file()
-    assert seconds < 60, f"docs build took {seconds:.1f} s (budget 60 s)"
 
 
 def test_nomenclature_lists_every_parameter_of_the_default_unit():

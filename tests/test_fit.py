@@ -7,8 +7,6 @@ discovery tests on independent truth data are in ``test_diagnosis.py``.
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -16,12 +14,13 @@ import pytest
 from hdsim.model import effects as fx
 from hdsim.model.catalog import load_unit
 from hdsim.errors import InputError
-from hdsim.identification.fit import fit, load_fitted, parse_effects, split_stiffness
+from hdsim.identification.fit import fit, load_fitted, parse_effects
+from hdsim.identification.problem import split_stiffness
 from hdsim.io.measurement import make_measurement
 from hdsim.physics import friction as fr
-from hdsim.scenarios.profiles import cosine_ramps
+from hdsim.simulation.profiles import cosine_ramps
 from hdsim.simulation.quasistatic import (UnsupportedEffect, dynamic_locked_twist, locked_twist,
-                               sample_grid, stack_models)
+                               sample_grid)
 
 UNIT = load_unit()
 K = float(UNIT.base_stiffness)
@@ -60,7 +59,8 @@ def test_quasistatic_matches_dynamic_model_on_a_slow_profile(drop, tol_rms):
     assert np.ptp(d) > 3e-3  # a real ±T_N loop was compared
 
 
-@pytest.mark.parametrize("drop", [("friction", "hardening"), ("friction",), ()])
+@pytest.mark.parametrize("drop", [pytest.param(("friction", "hardening"), marks=pytest.mark.slow),
+                                  pytest.param(("friction",), marks=pytest.mark.slow), ()])
 def test_quasistatic_with_backlash_differs_only_in_the_boundary_layer_at_zero_torque(drop):
     """Backlash + damping (and body friction): the body in series with the dead zone has its
     own state in the dynamic model (``backlash.closure``). Only the output inertia differs:
@@ -128,11 +128,8 @@ def test_dahl_update_is_the_exact_solution_of_the_library_law():
     for z0, dx in ((0.0, 2e-4), (3.0, -1.5e-4), (-3.9, 4e-5)):
         sol = solve_ivp(lambda th, z: [fr.dahl_rate(z[0], np.sign(dx), sigma, F)], (0, abs(dx)), [z0],
                         rtol=1e-11, atol=1e-12)
-        model = UNIT.with_effects(friction=fx.DahlFriction(torque_max=F, sigma=sigma))
-        from hdsim.simulation.quasistatic import _Kernel
-
-        kern = _Kernel(stack_models(model))
-        z, _ = kern.dahl(np.array([z0]), np.array([dx]))
+        law = fx.DahlFriction(torque_max=F, sigma=sigma)
+        z = law.advance(np.array([[z0]]), 0.0, dx, spring=None)[0]
         assert z[0] == pytest.approx(sol.y[0, -1], abs=1e-8)
 
 
@@ -166,10 +163,28 @@ def test_batch_parameters():
     np.testing.assert_allclose(out[2], single, atol=3e-9)  # Newton stop x_tol = 1e-8 rad
 
 
-def test_unsupported_effect_is_refused():
+def test_models_with_different_laws_in_one_slot_cannot_be_stacked():
     t, T = slow_profile(100)
+    other = UNIT.with_effects(friction=fx.DahlFriction(torque_max=1.0, sigma=1e5))
     with pytest.raises(UnsupportedEffect):
-        locked_twist(UNIT, t, T)  # the unit's default friction is dahl_slip
+        locked_twist([UNIT, other], t, T)  # dahl_slip and dahl in one batch
+
+
+@pytest.mark.slow  # 19 s: the dynamic micro-slip run over the whole ±T_N profile
+def test_series_slip_law_quasistatic_matches_the_dynamic_model():
+    # the default unit's friction slips in series with the spring and is evaluated by the
+    # generic rate-law sub-steps of the friction base class, not a closed form
+    model = UNIT.without("backlash")  # the bench damping keeps the output mode from ringing
+    t, T = slow_profile(400)
+    quasi = locked_twist(model, t, T)[0]
+    dyn = dynamic_locked_twist(model, t, T)[0]
+    error = np.abs(quasi - dyn)
+    # the slider crosses its slip range at a nearly constant torque, so near the slip
+    # torque the twist runs fast and the output inertia the quasi-static model drops
+    # shows; elsewhere the two agree within a microradian
+    away = np.abs(np.abs(T) - float(model.friction.slip_torque)) > 4.0  # two samples
+    assert np.max(error[away]) < 1e-6
+    assert np.sqrt(np.mean(error**2)) < 2e-6
 
 
 def test_sub_grid_of_a_long_record_stays_below_the_noise():
@@ -255,32 +270,45 @@ def test_parse_effects():
         parse_effects("dahl,coulomb")
 
 
-def test_fit_refuses_an_effect_it_cannot_evaluate():
-    meas = library_data(UNIT.without("hardening", "backlash", "friction", "damping"))
-    with pytest.raises(InputError):
-        fit(meas, "coulomb")
+def test_fit_refuses_an_effect_it_has_no_start_for():
+    """Every registered law can be evaluated (the friction base class steps any rate law),
+    but a fit that names only an effect id needs the class's placeholder values to start
+    from: without them, one InputError naming the effect."""
+    from dataclasses import dataclass
+
+    @dataclass(frozen=True, eq=False)
+    class NoStart(fx.Friction):
+        id = "no_start_test"  # a class attribute (no annotation: not a field)
+        torque: float = fx.param("a torque", "N·m", positive=True)
+
+    fx.register(NoStart)
+    try:
+        meas = library_data(UNIT.without("hardening", "backlash", "friction", "damping"))
+        with pytest.raises(InputError, match="cannot fit friction effect 'no_start_test'"):
+            fit(meas, "friction=no_start_test")
+    finally:
+        fx.unregister(NoStart)
 
 
 # --------------------------------------------------------------------------- CLI
 
 
-def run_cli(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "hdsim", *args], capture_output=True, text=True,
-                          cwd=cwd, timeout=300)
-
-
-def test_cli_fit_json_and_parameter_file(tmp_path):
+def test_cli_fit_json_and_parameter_file(tmp_path, cli):
     import truth
 
     cols, tr = truth.make_stiffness_data({"friction"}, set(), seed=3, n_rows=600, quarter_s=(1.0,))
     truth.write_csv(tmp_path / "bench.csv", cols, tr["meta"])
-    out = run_cli("fit", "bench.csv", "--effects", "friction", "--json", cwd=tmp_path)
-    assert out.returncode == 0, out.stderr
-    summary = json.loads(out.stdout)
+    code, out, err = cli("fit", "bench.csv", "--effects", "friction", "--json", cwd=tmp_path)
+    assert code == 0, err
+    summary = json.loads(out)
     assert summary["effects"] == ["friction"] and summary["rmse_rad"] < 1e-5
     assert (tmp_path / "bench.fit.toml").is_file()
     assert load_fitted(tmp_path / "bench.fit.toml").friction.id == "dahl"
     assert abs(summary["offset_rad"] - tr["params"]["offset_rad"]) < 1e-5
+    # a loop W wide at zero torque on a spring k1 holds a friction torque k1·W/2 (the truth's
+    # saturated Bouc–Wen torque); the Dahl fit finds it within 3 % (the loop shapes differ)
+    width, k1 = tr["params"]["friction"]["width_rad"], tr["params"]["k1"]
+    assert summary["params"]["friction.torque_max"] == pytest.approx(k1 * width / 2, rel=0.03)
 
 
 BAD_FILES = {
@@ -321,13 +349,6 @@ def test_cli_refuses_bad_files_with_one_line_and_writes_nothing(tmp_path, capsys
     assert sorted(p.name for p in tmp_path.iterdir()) == before
 
 
-def test_cli_bad_file_exit_status_from_the_console(tmp_path):
-    (tmp_path / "bad.csv").write_text(BAD_FILES["nan"])
-    out = run_cli("diagnose", "bad.csv", "--json", cwd=tmp_path)
-    assert out.returncode == 2 and len(out.stderr.strip().splitlines()) == 1 and out.stdout == ""
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv"]
-
-
 @pytest.mark.parametrize("args,text", [
     (["--effects", "fricton"], "did you mean friction"),
     (["--unit", "CSG-99-100"], "unknown unit"),
@@ -337,3 +358,63 @@ def test_cli_refuses_bad_options(tmp_path, capsys, monkeypatch, args, text):
     (tmp_path / "ok.csv").write_text(BAD_FILES["too_few_rows"])
     code, out, err = run_main(["fit", "ok.csv", *args], tmp_path, capsys, monkeypatch)
     assert code == 2 and text in err and len(err.strip().splitlines()) == 1
+
+
+# --------------------------------------------------------------------------- kinematic-error fit
+def ke_measurement(cols, ratio=100.0):
+    return make_measurement("kinematic_error", cols["time_s"], cols["torque_Nm"], cols["output_angle_rad"],
+                            wg_angle=cols["wg_angle_rad"], ratio=ratio, rated_torque=87.0)
+
+
+def test_kinematic_error_fit_recovers_a_hand_built_fourier_error():
+    """Exact recovery (same functional form as the library's, built by hand here): output
+    angle = offset + θ_wg/N + T/K + Σ a_k sin(k θ_wg + p_k) + a_o sin(θ_wg/N + p_o) under a
+    reversing load; the fit returns K and every amplitude to the noise (1e-8 rad)."""
+    N, K_true = 100.0, 3.4e4
+    t = np.linspace(0.0, 50.0, 4000)
+    out_nominal = 2 * np.pi / 20.0 * (t - np.where(t > 25.0, 2 * (t - 25.0), 0.0))  # forward, then back
+    wg = N * out_nominal
+    T = -20.0 * np.tanh((25.0 - t) / 0.2)  # the load opposes the motion
+    amps = {"a1": 2e-5, "a2": 6e-5, "a4": 1e-5, "a_out": 9e-5}
+    phases = {"p1": 0.3, "p2": -1.2, "p4": 2.0, "p_out": 0.7}
+    ke = (amps["a1"] * np.sin(wg + phases["p1"]) + amps["a2"] * np.sin(2 * wg + phases["p2"])
+          + amps["a4"] * np.sin(4 * wg + phases["p4"]) + amps["a_out"] * np.sin(out_nominal + phases["p_out"]))
+    angle = 1.3 + out_nominal + T / K_true + ke + np.random.default_rng(0).normal(0, 1e-8, t.size)
+    res = fit(ke_measurement({"time_s": t, "torque_Nm": T, "output_angle_rad": angle, "wg_angle_rad": wg}),
+              ["kinematic_error"])
+    assert res.effects == {"kinematic_error": "fourier"}
+    assert res.internal["stiffness.K0"] == pytest.approx(K_true, rel=1e-4)
+    assert res.offset == pytest.approx(1.3, abs=1e-7)
+    for name, value in amps.items():
+        assert res.ke_coefficients[name] == pytest.approx(value, rel=1e-3), name
+        assert res.params[f"kinematic_error.{name}"] == res.ke_coefficients[name]
+    for name, value in phases.items():
+        assert res.ke_coefficients[name] == pytest.approx(value, abs=1e-3), name
+    assert res.rmse_rad < 2e-8
+
+
+def test_kinematic_error_fit_on_independent_truth_data(truth_ke):
+    """Truth KE (``tests/truth.py``): a von-Mises bump at 2× the WG angle, not a Fourier
+    series. Its first harmonic has amplitude a2; its second, a2·I₂(κ)/I₁(κ) at phase
+    −4 p2, adds to the 4× term: the fitted 4× amplitude is |a4 e^{i(p4 − π/2)} +
+    a2 (I₂/I₁) e^{−4 i p2}| (both as cosine phasors of 4θ_wg). The spring is linear k1."""
+    from scipy.special import iv
+
+    cols, tr = truth_ke
+    res = fit(ke_measurement(cols), ["kinematic_error"])
+    ke = tr["params"]["kinematic_error"]
+    got = res.ke_coefficients
+    assert got["a1"] == pytest.approx(ke["a1"], rel=0.02)
+    assert got["a2"] == pytest.approx(ke["a2"], rel=0.02)
+    assert got["a_out"] == pytest.approx(ke["ao"], rel=0.02)
+    bump = ke["a2"] * iv(2, ke["kappa"]) / iv(1, ke["kappa"])
+    a4 = abs(ke["a4"] * np.exp(1j * (ke["p4"] - np.pi / 2)) + bump * np.exp(-4j * ke["p2"]))
+    assert got["a4"] == pytest.approx(a4, rel=0.02)
+    assert abs(a4 - ke["a4"]) > 0.03 * ke["a4"]  # the bump's 4× content is visible
+    assert res.internal["stiffness.K0"] == pytest.approx(tr["params"]["k1"], rel=0.01)
+    # what is left: the measurement noise (angle noise, both encoders' quantisation) and the
+    # bump's harmonics at 6×, 8×, … of the WG angle, which the 1×, 2×, 4× series cannot hold
+    m = tr["measurement"]
+    beyond = sum((ke["a2"] * iv(n, ke["kappa"]) / iv(1, ke["kappa"])) ** 2 / 2 for n in range(3, 12))
+    floor = m["noise_rad"] ** 2 + m["quant_rad"] ** 2 / 12 + (m["wg_quant_rad"] / 100) ** 2 / 12
+    assert res.rmse_rad == pytest.approx(np.sqrt(floor + beyond), rel=0.03)

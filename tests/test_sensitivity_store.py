@@ -63,6 +63,9 @@ def _rows_hex(out):
     return [row.tobytes().hex() for row in X], status
 
 
+@pytest.mark.slow(reason="14 s of wall time in four subprocesses; the in-process "
+                  "test_interrupted_cli_study_resumes_without_redoing_rows covers resume in the default "
+                  "run; to be rebuilt as a faster real-kill test")
 def test_sigkill_then_resume_matches_uninterrupted(tmp_path):
     (tmp_path / "slowmodel.py").write_text(SLOW_MODEL)
     total = 256 * 5
@@ -162,3 +165,166 @@ def test_target_width_stops_early():
     widths = 2 * np.r_[res.analysis["S1_conf_replicates"], res.analysis["ST_conf_replicates"]]
     assert res.n < 4096 and widths.max() < 0.2
     assert res.evaluations == res.n * 5
+
+
+# --------------------------------------------------------------------------- in-process resume
+STEP_MODEL = textwrap.dedent("""
+    import os
+    import numpy as np
+    from hdsim.sensitivity.functions import Ishigami
+
+    _f = Ishigami()
+    calls = 0
+
+    def model(X):
+        # Ishigami, logging each evaluated row; Ctrl-C after STOP_AFTER calls; NaN where
+        # x1 > FAIL_ABOVE (both switches read from the environment on every call)
+        global calls
+        calls += 1
+        stop = int(os.environ.get("STOP_AFTER", "0"))
+        if stop and calls > stop:
+            raise KeyboardInterrupt
+        with open(os.environ["ROW_LOG"], "a") as fh:
+            fh.write("".join(row.tobytes().hex() + "\\n" for row in X))
+        y = _f(X)
+        if "FAIL_ABOVE" in os.environ:
+            y = np.where(X[:, 0] > float(os.environ["FAIL_ABOVE"]), np.nan, y)
+        return y
+""")
+PI = "3.141592653589793"
+STEP_ARGS = ["--params", "x1,x2,x3", "--bounds", f"x1=-{PI}:{PI}", f"x2=-{PI}:{PI}", f"x3=-{PI}:{PI}",
+             "--seed", "5", "--workers", "1", "--chunksize", "8", "--json"]
+
+
+@pytest.fixture
+def step_model(tmp_path, monkeypatch, request):
+    """(module, run) — ``run(out, *extra) -> (code, json or None, stderr)`` through
+    ``hdsim.cli.main`` with a fresh copy of STEP_MODEL importable as a unique module."""
+    import importlib
+
+    from hdsim.cli import main
+
+    name = f"step_model_{request.node.name.split('[')[0]}"
+    (tmp_path / f"{name}.py").write_text(STEP_MODEL)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    module = importlib.import_module(name)
+    monkeypatch.setenv("ROW_LOG", str(tmp_path / "rows.log"))
+    capsys = request.getfixturevalue("capsys")
+
+    def run(out, n, *extra):
+        module.calls = 0
+        capsys.readouterr()
+        code = main(["sobol", "--model", f"{name}:model", *STEP_ARGS, "--n", str(n), "--out", str(out), *extra])
+        captured = capsys.readouterr()
+        return code, (json.loads(captured.out) if code == 0 else None), captured.err
+
+    yield module, run
+    sys.modules.pop(name, None)
+
+
+KEYS = ("S1", "ST", "S1_conf", "ST_conf", "S1_conf_replicates", "ST_conf_replicates")
+
+
+def test_interrupted_cli_study_resumes_without_redoing_rows(tmp_path, monkeypatch, step_model):
+    """Ctrl-C after 30 of 80 chunks: the 240 finished rows are on disk, resume evaluates
+    exactly the other 400, and the indices equal an uninterrupted study's bit for bit."""
+    _, run = step_model
+    log = tmp_path / "rows.log"
+    code, ref, err = run(tmp_path / "ref.h5", 128)
+    assert code == 0, err
+    log.unlink()
+
+    monkeypatch.setenv("STOP_AFTER", "30")
+    code, _, err = run(tmp_path / "cut.h5", 128)
+    assert code == 1 and "interrupted" in err
+    rows, status = _rows_hex(tmp_path / "cut.h5")
+    done = {rows[i] for i in np.flatnonzero(status == DONE)}
+    assert len(done) == 30 * 8 and int((status == PENDING).sum()) == 128 * 5 - 240
+    before = _lines(log)
+    assert set(before) == done  # in-process, a chunk is written before the next one starts
+
+    monkeypatch.delenv("STOP_AFTER")
+    code, resumed, err = run(tmp_path / "cut.h5", 128, "--resume")
+    assert code == 0, err
+    after = _lines(log)[len(before):]
+    assert not set(after) & done and len(after) == len(set(after)) == 128 * 5 - 240
+    assert set(before) | set(after) == set(rows)
+    assert resumed["evaluated_now"] == len(after) and resumed["evaluations"] == 128 * 5
+    for key in KEYS:
+        assert resumed[key] == ref[key], key
+
+
+def test_resume_retry_failed_reruns_only_the_failed_rows(tmp_path, monkeypatch, step_model):
+    """``hdsim sobol --resume --retry-failed``: rows that failed (NaN for x1 > 2.5) are
+    kept as failed by a plain resume and re-evaluated, alone, with --retry-failed; once
+    they succeed the study equals one that never failed."""
+    _, run = step_model
+    code, healthy, err = run(tmp_path / "healthy.h5", 64)
+    assert code == 0, err
+
+    monkeypatch.setenv("FAIL_ABOVE", "2.5")
+    code, failing, err = run(tmp_path / "s.h5", 64)
+    assert code == 0, err
+    failed = [f["row"] for f in failing["failures"]]
+    assert failed and failing["blocks_dropped"] > 0
+    assert all(f["params"]["x1"] > 2.5 and f["message"].startswith("non-finite") for f in failing["failures"])
+    assert "dropped" in err
+
+    monkeypatch.delenv("FAIL_ABOVE")
+    code, plain, _ = run(tmp_path / "s.h5", 64, "--resume")
+    assert plain["evaluated_now"] == 0 and [f["row"] for f in plain["failures"]] == failed
+
+    log_before = _lines(tmp_path / "rows.log")
+    code, retried, err = run(tmp_path / "s.h5", 64, "--resume", "--retry-failed")
+    assert code == 0, err
+    rerun = _lines(tmp_path / "rows.log")[len(log_before):]
+    rows, status = _rows_hex(tmp_path / "s.h5")
+    assert sorted(rerun) == sorted(rows[g] for g in failed)  # the failed rows, nothing else
+    assert retried["evaluated_now"] == len(failed)
+    assert retried["failures"] == [] and retried["blocks_dropped"] == 0 and np.all(status == DONE)
+    for key in KEYS:
+        assert retried[key] == healthy[key], key
+
+
+# --------------------------------------------------------------------------- store I/O
+def test_store_writes_and_reads_evaluated_rows(tmp_path):
+    """The study store: outputs land at their rows (also scattered rows), the status and
+    failure messages survive closing and reopening, and pending/failed rows are told apart."""
+    from hdsim.sensitivity.design import fingerprint, replicate_seed, sample_replicate
+    from hdsim.sensitivity.store import FAILED, open_store
+
+    definition = {"problem": F.problem().to_dict(), "seed": 3, "second_order": False, "replicates": 4,
+                  "model": {"function": "ishigami"}}
+    path = tmp_path / "s.h5"
+    store = open_store(definition, 64, path)
+    all_rows = store.pending(64)
+    assert len(all_rows) == 64 * 5 and store.counts() == {"done": 0, "failed": 0, "pending": 320}
+    # the stored design is the replicate-major Saltelli design of the definition
+    design = np.concatenate([sample_replicate(F.problem(), 16, replicate_seed(3, r), False) for r in range(4)])
+    np.testing.assert_array_equal(store.read("X", all_rows), design)
+    rows = np.array([5, 6, 7, 40, 41, 300])  # three runs of rows
+    X = store.read("X", rows)
+    y = F(X)
+    store.write(rows, y, fingerprint(X), {4: "solver gave up"})
+    store.save_failures()
+    store.close()
+
+    again = open_store(definition, 64, path, resume=True)
+    try:
+        np.testing.assert_array_equal(again.read("Y", rows), y)
+        np.testing.assert_array_equal(again.read("key", rows), fingerprint(design[rows]))
+        status = again.read("status", rows)
+        assert status.tolist() == [DONE, DONE, DONE, DONE, FAILED, DONE]
+        assert again.failures(64) == {41: "solver gave up"}
+        assert again.counts() == {"done": 5, "failed": 1, "pending": 314}
+        pending = again.pending(64)
+        assert len(pending) == 314 and not set(rows) & set(pending.tolist())
+        assert set(again.pending(64, retry_failed=True).tolist()) == set(pending.tolist()) | {41}
+        untouched = np.setdiff1d(all_rows, rows)
+        assert np.all(np.isnan(again.read("Y", untouched)))
+        # the lazy reader hands out design rows by position
+        reader = again.reader(pending)
+        assert len(reader) == 314
+        np.testing.assert_array_equal(reader[10:13], design[pending[10:13]])
+    finally:
+        again.close()

@@ -129,13 +129,16 @@ def test_base_alone_is_linear_elastic():
     np.testing.assert_allclose(twist, cols["torque_Nm"] / tr["params"]["k1"], atol=1e-12)
 
 
-def test_test_runs_fast():
-    import time
-
-    start = time.perf_counter()
-    stiff({"friction", "damping", "hardening", "backlash"}, seed=0, friction_form="maxwell_slip")
-    truth.make_ke_data({"kinematic_error", "friction", "backlash"}, seed=0)
-    assert time.perf_counter() - start < 3.0
+def test_every_form_runs_together_and_stays_finite():
+    """The heaviest combinations (Maxwell-slip with every stiffness family; KE with friction
+    and backlash) run and give finite, quantised columns. (Their speed is not a test.)"""
+    cols, tr = stiff({"friction", "damping", "hardening", "backlash"}, seed=0, friction_form="maxwell_slip")
+    assert all(np.all(np.isfinite(c)) for c in cols.values())
+    assert tr["params"]["friction"]["form"] == "maxwell_slip"
+    cols, tr = truth.make_ke_data({"kinematic_error", "friction", "backlash"}, seed=0)
+    assert all(np.all(np.isfinite(c)) for c in cols.values())
+    steps = cols["output_angle_rad"] / tr["measurement"]["quant_rad"]
+    np.testing.assert_allclose(steps, np.round(steps), atol=1e-6)
 
 
 # --------------------------------------------------------------------------- signatures

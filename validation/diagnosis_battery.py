@@ -109,7 +109,7 @@ def main(argv=None):
         rows += json.loads(earlier.read_text())["cases"]
     lines = summarise(rows)
     print("\n".join(lines))
-    from hdsim.io.atomic import write_text_atomic
+    from hdsim.atomic import write_text_atomic
 
     args.out.parent.mkdir(parents=True, exist_ok=True)
     write_text_atomic(args.out, json.dumps({"table": lines, "cases": rows}, indent=1))

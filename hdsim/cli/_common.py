@@ -8,13 +8,15 @@ from pathlib import Path
 
 import numpy as np
 
-from hdsim.model.effects import FAMILIES, NO_EFFECT
 from hdsim.errors import InputError, unknown_name
 from hdsim.model.drive import HarmonicDrive
+from hdsim.model.effects import FAMILIES, NO_EFFECT
+from hdsim.plotting import save_figure
 from hdsim.scenarios.scenario import Scenario
 
 
 def add_set_argument(parser) -> None:
+    """Add the repeatable ``--set NAME=VALUE`` option to a verb's parser."""
     parser.add_argument(
         "--set", dest="sets", action="append", default=[], metavar="NAME=VALUE",
         help="change a parameter (SI units), e.g. flexspline.h_c=0.6e-3; switch an effect off "
@@ -22,6 +24,7 @@ def add_set_argument(parser) -> None:
 
 
 def parse_sets(items) -> dict[str, str]:
+    """``["NAME=VALUE", ...]`` as ``{NAME: VALUE}`` (strings); InputError on a malformed item."""
     out = {}
     for item in items:
         name, sep, value = item.partition("=")
@@ -42,7 +45,23 @@ def _number(name, text) -> float:
 
 
 def apply_sets(model: HarmonicDrive, scenario: Scenario, sets: dict[str, str]):
-    """(model, scenario) with the ``--set`` changes applied; every name is checked first."""
+    """The model and scenario with the ``--set`` changes applied; every name is checked first.
+
+    Parameters
+    ----------
+    model : HarmonicDrive
+        The unit.
+    scenario : Scenario
+        The scenario.
+    sets : dict
+        ``{name: text}``: a dotted parameter (SI), an effect family set to ``none``, or
+        ``scenario.TABLE.KEY``.
+
+    Returns
+    -------
+    tuple
+        (model, scenario).
+    """
     scenario_updates, effect_switches, params = {}, {}, {}
     known = model.params()
     for name, text in sets.items():
@@ -64,10 +83,12 @@ def apply_sets(model: HarmonicDrive, scenario: Scenario, sets: dict[str, str]):
 
 
 def metrics_as_floats(metrics: dict) -> dict[str, float]:
+    """The first sample of each metric, as a float."""
     return {name: float(np.asarray(value).reshape(-1)[0]) for name, value in metrics.items()}
 
 
 def print_metrics(title: str, metrics: dict[str, float], stream=sys.stdout) -> None:
+    """Print a title and one aligned ``name  value`` line per metric."""
     print(title, file=stream)
     width = max(len(k) for k in metrics) if metrics else 0
     for name, value in metrics.items():
@@ -75,24 +96,40 @@ def print_metrics(title: str, metrics: dict[str, float], stream=sys.stdout) -> N
 
 
 def _figures(setup: str) -> dict:
-    """The figures a person looks at for each bench set-up: name -> plot function."""
-    from hdsim.plotting import driven as driven_plots, locked as plotting
+    """The figures a person looks at for a bench set-up (the set-ups are in
+    `hdsim.scenarios.registry`): kind -> plot function; the file is ``SCENARIO_KIND.png``."""
+    # matplotlib is imported when figures are drawn, not at the start-up of every verb (~0.3 s)
+    from hdsim.plotting import driven as driven_plots, locked as locked_plots
 
-    if setup == "driven_wave_generator":
-        return {"deviation": driven_plots.plot_deviation, "time": driven_plots.plot_driven_time}
-    return {"loop": plotting.plot_loop, "time": plotting.plot_time}
+    figures = {
+        "locked_wave_generator": {"loop": locked_plots.plot_loop, "time": locked_plots.plot_time},
+        "driven_wave_generator": {"deviation": driven_plots.plot_deviation, "time": driven_plots.plot_driven_time},
+    }
+    return figures[setup]
 
 
 def write_outputs(run, out_dir: Path, figures: bool = True) -> dict[str, str]:
-    """HDF5 result and figures for a finished run; returns the paths written."""
-    from hdsim.plotting import locked as plotting
-    from hdsim.io.results import write_result
+    """Run file and figures for a finished run.
 
+    Parameters
+    ----------
+    run : hdsim.scenarios.run.Run
+        The finished run.
+    out_dir : pathlib.Path
+        Output folder, created if missing: ``SCENARIO.h5`` and ``SCENARIO_KIND.png``.
+    figures : bool
+        Draw the bench's figures.
+
+    Returns
+    -------
+    dict
+        ``result`` and ``KIND_figure`` → the path written.
+    """
     out_dir = Path(out_dir)
-    paths = {"result": str(write_result(out_dir / f"{run.scenario.name}.h5", run))}
+    paths = {"result": str(run.save(out_dir / f"{run.scenario.name}.h5"))}
     if figures:
         for kind, draw in _figures(run.result.setup).items():
             path = out_dir / f"{run.scenario.name}_{kind}.png"
-            plotting.save(draw(run), path)
+            save_figure(draw(run), path)
             paths[f"{kind}_figure"] = str(path)
     return paths

@@ -6,14 +6,15 @@ import sys
 import time
 from pathlib import Path
 
+from hdsim.cli import _common, emit_json
 from hdsim.model.catalog import catalog_entry, default_unit, load_unit
-from hdsim.cli import _common
 from hdsim.scenarios.run import run_scenario
-from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario
+from hdsim.scenarios.scenario import load_scenario
 from hdsim.units import rad_to_arcmin
 
 
 def register(subparsers) -> None:
+    """Add the ``demo`` verb."""
     p = subparsers.add_parser("demo", help="lost-motion and stiffness tests on the default unit",
                               description="Run the catalog ±4 % T_N lost-motion test and the ±T_N "
                                           "stiffness test; write figures and HDF5 results to --out.")
@@ -24,10 +25,11 @@ def register(subparsers) -> None:
 
 
 def main(args) -> int:
+    """Run both tests, write their files, print the summary; exit status."""
     start = time.perf_counter()
     model = load_unit(args.unit)
     catalog = catalog_entry(model.name)
-    scenarios = [load_scenario(builtin_scenario_path(name)) for name in ("lost_motion", "stiffness")]
+    scenarios = [load_scenario(name) for name in ("lost_motion", "stiffness")]
     out = Path(args.out)
     summary, files = {}, {}
     for scenario in scenarios:
@@ -38,8 +40,6 @@ def main(args) -> int:
     elastic = rad_to_arcmin(0.08 * catalog["rated_torque"] / catalog["K1"])
     seconds = time.perf_counter() - start
     if args.json:
-        from hdsim.cli import emit_json
-
         emit_json({"unit": model.name, "metrics": summary, "catalog": catalog,
                    "elastic_lost_motion_arcmin": elastic, "files": files, "seconds": seconds})
         return 0

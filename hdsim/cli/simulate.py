@@ -1,21 +1,23 @@
-"""``hdsim simulate SCENARIO.toml``: run one scenario on one unit."""
+"""``hdsim simulate SCENARIO``: run one scenario (a file or a built-in name) on one unit."""
 
 from __future__ import annotations
 
 import sys
 from pathlib import Path
 
+from hdsim.cli import _common, emit_json
 from hdsim.model.catalog import load_unit
-from hdsim.cli import _common
 from hdsim.scenarios.run import run_scenario
-from hdsim.scenarios.scenario import load_scenario
+from hdsim.scenarios.scenario import builtin_scenario_names, load_scenario
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser("simulate", help="run a scenario file on a unit",
-                              description="Run a scenario (TOML) on a built-in unit; write an HDF5 "
-                                          "result and figures to --out.")
-    p.add_argument("scenario", help="scenario file, e.g. scenarios/lost_motion.toml")
+    """Add the ``simulate`` verb."""
+    p = subparsers.add_parser("simulate", help="run a scenario on a unit",
+                              description="Run a scenario (a TOML file or a built-in scenario) on a "
+                                          "built-in unit; write an HDF5 result and figures to --out.")
+    p.add_argument("scenario", help="scenario file (e.g. my_test.toml) or built-in scenario name: "
+                                    + ", ".join(builtin_scenario_names()))
     p.add_argument("--unit", default=None, help="built-in unit (default CSG-25-100); see 'hdsim units'")
     _common.add_set_argument(p)
     p.add_argument("--out", default="hdsim-out", help="output folder (default ./hdsim-out)")
@@ -25,6 +27,7 @@ def register(subparsers) -> None:
 
 
 def main(args) -> int:
+    """Run the scenario, write the run file and figures, print the metrics; exit status."""
     # everything that can be wrong with the input is checked before anything is written
     scenario = load_scenario(args.scenario)
     model, scenario = _common.apply_sets(load_unit(args.unit), scenario, _common.parse_sets(args.sets))
@@ -32,8 +35,6 @@ def main(args) -> int:
     paths = _common.write_outputs(run, Path(args.out), figures=not args.no_figures)
     metrics = _common.metrics_as_floats(run.metrics)
     if args.json:
-        from hdsim.cli import emit_json
-
         emit_json({"scenario": scenario.name, "unit": model.name, "metrics": metrics,
                    "result": paths["result"], "files": paths})
     else:

@@ -123,7 +123,7 @@ def _extras(args, model, analytic, names, result) -> dict:
 
 def _write_outputs(args, summary, result, analytic, target) -> None:
     """Figures and the JSON summary: into ``--report DIR`` or next to ``--out``."""
-    from hdsim.io.atomic import write_text_atomic
+    from hdsim.atomic import write_text_atomic
     from hdsim.plotting.sensitivity import plot_convergence, plot_indices
 
     if args.report:

@@ -1,1 +1,1 @@
-"""identification"""
+"""Model against measurement: the fit, residual views, the diagnosis and its report."""

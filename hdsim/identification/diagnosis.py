@@ -1,16 +1,16 @@
 """Which effect is missing: greedy forward selection over the effect families.
 
-Procedure (``reference/sensitivity-and-diagnosis.md`` §7)
----------------------------------------------------------
+Procedure
+---------
 1. Fit the baseline (the base model plus the families the user names) to all rows, and
    to each of two *hold-out folds*: distinct experiments in the record (the loading-rate
    blocks when the torque has more than one rate, else the first and second half of the
    loading legs; for a kinematic-error test, alternate blocks of ten wave-generator
    revolutions, so that each fold holds both load directions). A fold fit minimises the residual on its own rows only; the other
    fold's rows are its hold-out.
-2. For every family not yet in the model, add its effect (:data:`hdsim.identification.fit.DEFAULT_EFFECT`)
+2. For every family not yet in the model, add its effect (the family's default effect, or the one named in ``candidates``)
    and refit all rows and both folds, starting from the baseline's values. All these fits
-   run in lockstep in one batched pass per iteration (:func:`hdsim.identification.fit.fit_many`).
+   run in lockstep in one batched pass per iteration (`hdsim.identification.fit.fit_many`).
 3. Score each candidate by the change of an information criterion, BIC computed with an
    *effective* sample size::
 
@@ -27,18 +27,18 @@ Procedure (``reference/sensitivity-and-diagnosis.md`` §7)
    5 %. (Pooled, not fold by fold: when the folds are the two loading rates, a fit on
    the slow rate alone cannot tell damping from friction, so its prediction of the fast
    rate is poor for baseline and candidate alike and the gain there says nothing about
-   the candidate; the battery lost a third of its true findings to that rule.) Then it
+   the candidate; judged fold by fold, the battery misses a third of its true findings.) Then it
    becomes the baseline and the next round starts; the procedure stops when nothing
    passes, or when the residual is explained (white, or at the noise floor).
 5. *Ambiguity*: when the runner-up also passes and its score is within
    ``max(10, 10 %)`` of the best, the pair is reported with the measurement that would
-   separate them (:data:`SEPARATING`); the better one is still added.
+   separate them (`SEPARATING`); the better one is still added.
 
-Whiteness of the final residual (:func:`hdsim.identification.residuals.whiteness`) decides the verdict:
+Whiteness of the final residual (`hdsim.identification.residuals.whiteness`) decides the verdict:
 a residual that is neither white nor at the noise floor means the model still misses
 something (a form the library lacks, or an effect outside it) and no success is claimed.
 
-The acceptance rule was set on the battery ``validation/diagnosis_battery.py`` (truth
+The acceptance rule is tuned on the battery ``validation/diagnosis_battery.py`` (truth
 data from ``tests/truth.py``, forms unlike the library's; the slow tests of
 ``tests/test_diagnosis.py`` run a part of it): its rates are in the tutorial
 ``docs/tutorial-find-missing-effect.md``.
@@ -53,8 +53,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hdsim.errors import InputError
-from hdsim.identification.fit import (DEFAULT_EFFECT, Evaluator, FitResult, build_model, effective_n, fit_many,
-                       make_problem, parse_effects, result_of)
+from hdsim.identification.fit import (Evaluator, FitResult, build_model, effective_n, fit_many, make_problem,
+                                      parse_effects, result_of)
+from hdsim.model import effects as fx
 from hdsim.io.measurement import Measurement
 from hdsim.model.drive import SLOTS
 from hdsim.identification.residuals import findings, whiteness
@@ -235,7 +236,7 @@ class Step:
 
 @dataclass
 class Diagnosis:
-    """Result of :func:`diagnose`; :meth:`to_json` gives the contract's object."""
+    """Result of `diagnose`; `to_json` gives the object ``hdsim diagnose --json`` prints (docs/cli.md)."""
 
     measurement: Measurement
     steps: list
@@ -322,10 +323,10 @@ class Diagnosis:
 # --------------------------------------------------------------------------- procedure
 
 
-def _problems(model, meas, masks, starts, label):
-    probs = [make_problem(model, meas, rows=None, start=starts[0], label=f"{label}:all")]
+def _problems(model, meas, ev, masks, starts, label):
+    probs = [make_problem(model, meas, ev, rows=None, start=starts[0], label=f"{label}:all")]
     for i, mask in enumerate(masks):
-        probs.append(make_problem(model, meas, rows=mask, start=starts[i + 1], label=f"{label}:fold{i}"))
+        probs.append(make_problem(model, meas, ev, rows=mask, start=starts[i + 1], label=f"{label}:fold{i}"))
     return probs
 
 
@@ -333,8 +334,8 @@ def _results(ev, probs, unit):
     return [result_of(ev, p, unit=unit) for p in probs]
 
 
-def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, max_rounds: int | None = None,
-             max_steps: int = 4000, log=None) -> Diagnosis:
+def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candidates: dict | None = None,
+             max_rounds: int | None = None, max_steps: int = 4000, log=None) -> Diagnosis:
     """Find the effect families a measurement needs beyond ``effects``.
 
     Parameters
@@ -342,11 +343,14 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, max_r
     meas : Measurement
         A stiffness or kinematic-error test.
     effects : str, list or dict, optional
-        The baseline's families or effect ids (see :func:`hdsim.identification.fit.parse_effects`).
+        The baseline's families or effect ids (see `hdsim.identification.fit.parse_effects`).
     unit : str or HarmonicDrive, optional
         Built-in unit (default: the catalog default).
     families : iterable of str, optional
         Families to try (default: all the test can show).
+    candidates : dict, optional
+        ``{family: effect id}``: the effect that stands for a family when it is tried
+        (default: the family's default effect, `hdsim.model.effects.default_effect`).
     max_rounds : int, optional
         Stop after this many additions.
     max_steps : int
@@ -357,9 +361,15 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, max_r
     Returns
     -------
     Diagnosis
+        Every step with its fit and the candidates tried, what was added, the
+        ambiguities, the whiteness of the final residual and the findings.
     """
     t0 = time.perf_counter()
     chosen = effects if isinstance(effects, dict) else parse_effects(effects)
+    stand_in = {f: fx.default_effect(f) for f in SLOTS}
+    for family, effect_id in (candidates or {}).items():
+        fx.effect_class(family, effect_id)
+        stand_in[family] = effect_id
     pool = list(families) if families is not None else list(FAMILIES_BY_TEST[meas.test])
     for f in pool:
         if f not in FAMILIES_BY_TEST[meas.test]:
@@ -371,7 +381,7 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, max_r
 
     model = build_model(unit, chosen, meas)
     unit_name = model.name
-    probs = _problems(model, meas, masks, [None, None, None], "baseline")
+    probs = _problems(model, meas, ev, masks, [None, None, None], "baseline")
     passes += fit_many(ev, probs)
     fits = _results(ev, probs, unit_name)
     current = dict(chosen)
@@ -392,10 +402,10 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, max_r
         phase_a = []
         for family in todo:
             trial = dict(current)
-            trial[family] = DEFAULT_EFFECT[family]
+            trial[family] = stand_in[family]
             cmodel = build_model(unit, trial, meas)
-            warm = make_problem(cmodel, meas, start=dict(step.fit.internal), label=f"{family}:all")
-            cold = make_problem(cmodel, meas, start=None, label=f"{family}:all-fresh")
+            warm = make_problem(cmodel, meas, ev, start=dict(step.fit.internal), label=f"{family}:all")
+            cold = make_problem(cmodel, meas, ev, start=None, label=f"{family}:all-fresh")
             cands.append([family, cmodel, warm, cold])
             phase_a += [warm, cold]
         passes += fit_many(ev, phase_a)
@@ -408,9 +418,9 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, max_r
             optimum = dict(zip(best_all.names, (float(v[0]) for v in best_all.phys(best_all.u).values())))
             pairs = []
             for i, mask in enumerate(masks):
-                a = make_problem(cmodel, meas, rows=mask, start=dict(step.fold_fits[i].internal),
+                a = make_problem(cmodel, meas, ev, rows=mask, start=dict(step.fold_fits[i].internal),
                                  label=f"{family}:fold{i}")
-                b = make_problem(cmodel, meas, rows=mask, start=optimum, label=f"{family}:fold{i}-opt")
+                b = make_problem(cmodel, meas, ev, rows=mask, start=optimum, label=f"{family}:fold{i}-opt")
                 pairs.append((a, b))
                 phase_b += [a, b]
             entry.append((best_all, pairs))
@@ -419,7 +429,7 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, max_r
         for family, cmodel, warm, cold, (best_all, pairs) in cands:
             probs = [best_all] + [a if a.cost <= b.cost else b for a, b in pairs]
             res = _results(ev, probs, unit_name)
-            scored.append(_score(family, res, step))
+            scored.append(_score(family, stand_in[family], res, step))
         step.candidates = scored
         ranked = sorted(scored, key=lambda c: c.score)
         say("round %d: " % (rounds + 1) + ", ".join(f"{c.family} {c.score:.1f}" for c in ranked))
@@ -436,7 +446,7 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, max_r
                                   "measurement": _separating(best.family, second.family)})
         step.added = best.family
         added.append(best.family)
-        current[best.family] = DEFAULT_EFFECT[best.family]
+        current[best.family] = best.effect
         step = Step(effects=[f for f in SLOTS if f in current], fit=best.fit, fold_fits=best.fold_fits)
         steps.append(step)
         rounds += 1
@@ -449,7 +459,7 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, max_r
                      seconds=time.perf_counter() - t0, passes=passes)
 
 
-def _score(family: str, res: list, base: Step) -> Candidate:
+def _score(family: str, effect_id: str, res: list, base: Step) -> Candidate:
     fit_all, fold_fits = res[0], res[1:]
     r = fit_all.residual[fit_all.rows]
     n_eff = effective_n(r)
@@ -474,7 +484,7 @@ def _score(family: str, res: list, base: Step) -> Candidate:
     if gain < MIN_GAIN:
         reasons.append(f"rms error falls by only {100 * gain:.1f} %")
     ok = not reasons
-    return Candidate(family=family, effect=DEFAULT_EFFECT[family], fit=fit_all, fold_fits=fold_fits,
+    return Candidate(family=family, effect=effect_id, fit=fit_all, fold_fits=fold_fits,
                      score=float(score), n_eff=float(n_eff), holdout_rmse=hold, holdout_gain=gains,
                      pooled_holdout_gain=float(pooled),
                      gain=float(gain), accepted=ok, reason="passes" if ok else "; ".join(reasons))

@@ -15,7 +15,9 @@
 - ``index.html`` and ``index.md``: the before/after table, the ranking of every round,
   ambiguities, whiteness and the plain-sentence findings, with the figures.
 
-Everything is written atomically; figures use matplotlib's Agg backend.
+Everything is written atomically. The figures are drawn with matplotlib's object API
+(no pyplot, no backend selected), so writing a report leaves the backend of the
+calling process as it was.
 """
 
 from __future__ import annotations
@@ -25,7 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-from hdsim.io.atomic import write_text_atomic
+from hdsim.atomic import write_text_atomic
+from hdsim.io.figures import save_figure
 from hdsim.identification.residuals import order_spectrum, views
 from hdsim.units import ARCSEC_PER_RAD
 
@@ -35,19 +38,15 @@ FIGURES = ("measured_vs_model.png", "residual_vs_torque.png", "residual_vs_time.
            "residual_spectrum.png", "residual_vs_rate.png", "error_fall.png")
 
 
-def _plt():
-    import matplotlib
+def _figure(figsize: tuple[float, float]):
+    # matplotlib is imported on first use: reading a diagnosis does not need it.
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+    return Figure(figsize=figsize)
 
 
 def _save(fig, path: Path) -> None:
-    from hdsim.plotting.locked import save
-
-    save(fig, path, dpi=110, bbox_inches="tight")
+    save_figure(fig, path, dpi=110, bbox_inches="tight")
 
 
 def _label(step) -> str:
@@ -62,8 +61,21 @@ def _x(meas):
 
 
 def write_report(diagnosis, folder) -> Path:
-    """Write the figures and pages of ``diagnosis`` into ``folder``; returns index.html."""
-    plt = _plt()
+    """Write the figures and pages of a diagnosis into a folder.
+
+    Parameters
+    ----------
+    diagnosis : hdsim.identification.diagnosis.Diagnosis
+        The finished diagnosis.
+    folder : str or os.PathLike
+        Output folder, created if missing; the files of `FIGURES`, ``index.md`` and
+        ``index.html`` in it are replaced.
+
+    Returns
+    -------
+    pathlib.Path
+        ``index.html``.
+    """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     meas = diagnosis.measurement
@@ -74,7 +86,8 @@ def write_report(diagnosis, folder) -> Path:
     arcsec = ARCSEC_PER_RAD
 
     # measured vs model
-    fig, ax = plt.subplots(figsize=(7, 4.5))
+    fig = _figure((7, 4.5))
+    ax = fig.subplots()
     y = _x(meas)
     ax.plot(T, (y - first.fit.offset) * arcsec, ".", ms=2, color="0.6", label="measured")
     for step, style in ((first, "--"), (last, "-")):
@@ -87,7 +100,8 @@ def write_report(diagnosis, folder) -> Path:
     _save(fig, folder / FIGURES[0])
 
     # residual vs torque by direction
-    fig, axes = plt.subplots(1, 2 if last is not first else 1, figsize=(10, 4), sharey=True, squeeze=False)
+    fig = _figure((10, 4))
+    axes = fig.subplots(1, 2 if last is not first else 1, sharey=True, squeeze=False)
     for ax, step in zip(axes[0], (first, last)):
         v = views(meas, step.fit.residual)
         r = v["residual"] * arcsec
@@ -101,7 +115,8 @@ def write_report(diagnosis, folder) -> Path:
     _save(fig, folder / FIGURES[1])
 
     # residual vs time
-    fig, ax = plt.subplots(figsize=(10, 3.5))
+    fig = _figure((10, 3.5))
+    ax = fig.subplots()
     for step in steps:
         ax.plot(t, step.fit.residual * arcsec, lw=0.6, label=_label(step))
     ax.set_xlabel("time [s]")
@@ -111,7 +126,8 @@ def write_report(diagnosis, folder) -> Path:
 
     # spectrum
     if meas.test == "kinematic_error":
-        fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+        fig = _figure((10, 4))
+        axes = fig.subplots(1, 2)
         wg = np.asarray(meas.wg_angle, dtype=float)
         for step in (first, last):
             axes[0].plot(np.mod(wg, 2 * np.pi), step.fit.residual * arcsec, ".", ms=1.5, label=_label(step))
@@ -123,7 +139,8 @@ def write_report(diagnosis, folder) -> Path:
         axes[1].set_ylabel("amplitude [arcsec]")
         axes[1].legend(fontsize=8)
     else:
-        fig, ax = plt.subplots(figsize=(7, 4))
+        fig = _figure((7, 4))
+        ax = fig.subplots()
         dt = float(np.median(np.diff(t)))
         for step in (first, last):
             r = step.fit.residual - np.mean(step.fit.residual)
@@ -137,7 +154,8 @@ def write_report(diagnosis, folder) -> Path:
     _save(fig, folder / FIGURES[3])
 
     # loop width vs rate
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig = _figure((7, 4))
+    ax = fig.subplots()
     for step in steps:
         v = views(meas, step.fit.residual)
         rates, widths = _loop_by_rate(v)
@@ -149,7 +167,8 @@ def write_report(diagnosis, folder) -> Path:
     _save(fig, folder / FIGURES[4])
 
     # error fall
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig = _figure((7, 4))
+    ax = fig.subplots()
     labels = [_label(s) for s in steps]
     x = np.arange(len(steps))
     ax.bar(x - 0.2, [s.fit.rmse_rad * arcsec for s in steps], 0.4, label="rms error")

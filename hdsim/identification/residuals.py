@@ -1,24 +1,22 @@
 """Where the model fails: residual views, whiteness, and plain sentences that point at it.
 
-Residual ``r = measured − model`` (angle, [rad]) after a fit. The views of
-``reference/sensitivity-and-diagnosis.md`` §7:
+Residual ``r = measured − model`` (angle, [rad]) after a fit. The views (figures of
+docs/tutorial-find-missing-effect.md) and what each one shows:
 
-============================================ ==========================================
-view                                         signature → candidate
-============================================ ==========================================
-r vs torque, coloured by loading direction   loop → friction/damping; step at T = 0 →
-                                             backlash; slope changing with |T| → hardening
-r vs time                                    drift, creep, a bad segment
-r vs wave-generator angle, order spectrum    1×, 2×, 4× WG, 1× output → kinematic error
-r vs loading rate                            loop width growing with rate → damping
-============================================ ==========================================
+| view | signature → candidate |
+|---|---|
+| r vs torque, coloured by loading direction | loop → friction/damping; step at T = 0 → backlash; slope changing with abs(T) → hardening |
+| r vs time | drift, creep, a bad segment |
+| r vs wave-generator angle, order spectrum | 1×, 2×, 4× WG, 1× output → kinematic error |
+| r vs loading rate | loop width growing with rate → damping |
 
 Whiteness: the Ljung–Box statistic ``Q = N(N+2) Σ_{k≤h} ρ_k²/(N−k)`` (χ² with ``h``
-degrees of freedom for a white residual) and the noise floor ``σ_n = std(Δr)/√2`` (the
-first difference removes a slowly varying structure but keeps white noise). A residual
-counts as *explained* when it is white or when its rms is within 25 % of the noise floor
-(the structure left is below ~75 % of the noise rms); otherwise the model still misses
-something, whatever was added.
+degrees of freedom for a white residual; Ljung & Box, Biometrika 65 (1978) 297–303)
+and the noise floor ``σ_n = std(Δr)/√2`` (the first difference removes a slowly
+varying structure but keeps white noise). A residual counts as *explained* when it is
+white or when its rms is within 25 % of the noise floor (the structure left is below
+~75 % of the noise rms); otherwise the model still misses something, whatever was
+added.
 """
 
 from __future__ import annotations
@@ -38,7 +36,21 @@ EXPLAINED_RATIO = 1.25
 
 
 def ljung_box(r, lags: int = 20) -> tuple[float, float]:
-    """(Q, p-value) of the Ljung–Box test on ``r`` over ``lags`` lags."""
+    """Ljung–Box test of ``r`` for autocorrelation up to ``lags``.
+
+    Parameters
+    ----------
+    r : array_like
+        Residual (any unit).
+    lags : int
+        Number of lags h.
+
+    Returns
+    -------
+    tuple of float
+        ``(Q, p)``: the statistic and its p-value against χ² with ``lags`` degrees of
+        freedom; ``(0.0, 1.0)`` for a constant or too short residual.
+    """
     r = np.asarray(r, dtype=float)
     r = r - r.mean()
     n = r.size
@@ -51,13 +63,40 @@ def ljung_box(r, lags: int = 20) -> tuple[float, float]:
 
 
 def noise_floor(r) -> float:
-    """Rms of the white part of ``r``: ``std(diff(r))/√2`` [same unit as r]."""
+    """Rms of the white part of ``r``: ``std(diff(r))/√2``.
+
+    Parameters
+    ----------
+    r : array_like
+        Residual (any unit).
+
+    Returns
+    -------
+    float
+        Noise floor, in the unit of ``r``; 0 for fewer than three samples.
+    """
     r = np.asarray(r, dtype=float)
     return float(np.std(np.diff(r)) / math.sqrt(2.0)) if r.size > 2 else 0.0
 
 
 def whiteness(r, lags: int = 20) -> dict:
-    """Ljung–Box, noise floor and the verdict for a residual [rad]."""
+    """Ljung–Box, noise floor and the verdict for a residual.
+
+    Parameters
+    ----------
+    r : array_like
+        Residual [rad].
+    lags : int
+        Number of lags of the Ljung–Box test.
+
+    Returns
+    -------
+    dict
+        ``ljung_box_q``, ``lags``, ``p_value``, ``white`` (p > 0.01),
+        ``noise_floor_rad`` [rad], ``rmse_rad`` [rad], ``rms_over_noise`` [-],
+        ``structured_fraction`` [-] and ``explained`` (white, or rms within
+        `EXPLAINED_RATIO` of the noise floor).
+    """
     r = np.asarray(r, dtype=float)
     q, p = ljung_box(r, lags)
     floor = noise_floor(r)
@@ -72,10 +111,26 @@ def whiteness(r, lags: int = 20) -> dict:
 
 
 def order_spectrum(angle, r, max_order: float = 8.0, n_orders: int = 800):
-    """Amplitude [rad] of ``r`` at orders of ``angle`` (least-squares sine fit per order).
+    """Amplitude of ``r`` at orders of ``angle`` (least-squares sine fit per order).
 
     Works for any sampling of the angle (uneven, reversing): the amplitude at order ``k``
     is that of the best fit ``a sin(kθ) + b cos(kθ)``.
+
+    Parameters
+    ----------
+    angle : array_like
+        Angle θ the orders refer to [rad], e.g. the wave-generator angle.
+    r : array_like
+        Residual [rad].
+    max_order : float
+        Highest order [-].
+    n_orders : int
+        Number of orders, evenly spaced from ``max_order / n_orders`` to ``max_order``.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(orders, amplitude)``: orders [-] and amplitudes [rad].
     """
     angle = np.asarray(angle, dtype=float)
     r = np.asarray(r, dtype=float) - np.mean(r)
@@ -100,7 +155,22 @@ def _direction(time, torque):
 
 
 def views(meas, residual) -> dict:
-    """The arrays behind the figures: residual vs torque/direction, time, rate, WG angle."""
+    """The arrays behind the figures: residual vs torque/direction, time, rate, WG angle.
+
+    Parameters
+    ----------
+    meas : hdsim.io.measurement.Measurement
+        The measurement the residual belongs to.
+    residual : array_like
+        Residual [rad], one value per row of ``meas``.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``time`` [s], ``torque`` [N·m], ``residual`` [rad], ``direction`` (sign of the
+        smoothed dT/dt), ``rate`` (its magnitude [N·m/s]) and, for a kinematic-error test,
+        ``wg_angle`` [rad].
+    """
     direction, rate = _direction(meas.time, meas.torque)
     out = {"time": np.asarray(meas.time), "torque": np.asarray(meas.torque),
            "residual": np.asarray(residual), "direction": direction, "rate": rate}
@@ -114,7 +184,24 @@ def _band_mean(mask, r):
 
 
 def findings(meas, residual, max_items: int = 5) -> list[str]:
-    """Plain sentences that say where the model misses, largest first."""
+    """Plain sentences that say where the model misses, largest first.
+
+    Parameters
+    ----------
+    meas : hdsim.io.measurement.Measurement
+        The measurement the residual belongs to.
+    residual : array_like
+        Residual [rad], one value per row of ``meas``.
+    max_items : int
+        Most findings after the opening sentence.
+
+    Returns
+    -------
+    list of str
+        The rms against the noise floor first, then each finding larger than twice the
+        noise floor and a tenth of the rms (backlash step, hysteresis loop, rate
+        dependence, hardening, kinematic-error orders).
+    """
     r = np.asarray(residual, dtype=float)
     T = np.asarray(meas.torque, dtype=float)
     direction, rate = _direction(meas.time, meas.torque)

@@ -1,1 +1,1 @@
-"""io"""
+"""Files from the bench: measurement readers (CSV, HDF5) and the atomic figure writer."""

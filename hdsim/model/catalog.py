@@ -29,17 +29,46 @@ def _data() -> dict:
 
 
 def unit_names() -> list[str]:
-    """Names of the built-in units, as the catalog names them."""
+    """Names of the built-in units, as the catalog names them.
+
+    Returns
+    -------
+    list of str
+        E.g. ``['CSG-14-100', ..., 'CSG-32-100']``.
+    """
     return list(_data()["units"])
 
 
 def default_unit() -> str:
-    """The unit used when none is named (CSG-25-100)."""
+    """The unit used when none is named.
+
+    Returns
+    -------
+    str
+        ``'CSG-25-100'``.
+    """
     return _data()["default"]
 
 
 def catalog_entry(name: str) -> dict:
-    """Catalog data of a unit: size, ratio, rated torque [N·m], T1, T2 [N·m], K1–K3 [N·m/rad], status."""
+    """Catalog data of a built-in unit.
+
+    Parameters
+    ----------
+    name : str
+        Unit name, e.g. ``'CSG-25-100'``.
+
+    Returns
+    -------
+    dict
+        ``size`` [-], ``ratio`` [-], ``rated_torque``, ``T1``, ``T2`` [N·m],
+        ``K1``, ``K2``, ``K3`` [N·m/rad] and the ``status`` of the numbers.
+
+    Raises
+    ------
+    InputError
+        On an unknown name, with the closest known ones.
+    """
     units = _data()["units"]
     if name not in units:
         raise unknown_name("unit", name, units)
@@ -47,7 +76,23 @@ def catalog_entry(name: str) -> dict:
 
 
 def nominal_geometry(size: float, ratio: float) -> FlexsplineGeometry:
-    """Nominal flexspline of a catalog size from the assumed proportions."""
+    """Nominal flexspline of a catalog size from the assumed proportions.
+
+    The pitch diameter is the size in tenths of an inch; every dimension is a fixed
+    fraction of it (``[proportions]`` in hdsim/data/units.toml).
+
+    Parameters
+    ----------
+    size : float
+        Catalog size, e.g. 25 [-].
+    ratio : float
+        Transmission ratio [-]; the flexspline has ``2 |ratio|`` teeth.
+
+    Returns
+    -------
+    FlexsplineGeometry
+        The geometry [m, Pa].
+    """
     data = _data()
     d = size * 2.54e-3  # pitch diameter [m]: size = tenths of an inch
     p = data["proportions"]
@@ -62,7 +107,27 @@ def nominal_geometry(size: float, ratio: float) -> FlexsplineGeometry:
 
 
 def calibrate(geometry, wave_generator, K1, K2, K3):
-    """(kappa_mesh, e2, e3) that make the nominal chain reproduce K1, K2, K3."""
+    """The calibration numbers that make the nominal chain reproduce K1, K2, K3.
+
+    Parameters
+    ----------
+    geometry : FlexsplineGeometry
+        Nominal geometry.
+    wave_generator : WaveGenerator
+        Wave-generator data.
+    K1, K2, K3 : float
+        Catalog stiffness of the three segments [N·m/rad].
+
+    Returns
+    -------
+    tuple of float
+        ``(kappa_mesh, e2, e3)`` [-]: the mesh-zone factor and the engagement ratios.
+
+    Raises
+    ------
+    InputError
+        If the structural compliance alone exceeds 1/K3.
+    """
     chain = compliance_chain(geometry, wave_generator, 1.0)
     c_s, c_m = float(chain.structure), float(chain.mesh_zone)
     if c_s >= 1.0 / K3:
@@ -72,6 +137,35 @@ def calibrate(geometry, wave_generator, K1, K2, K3):
     e2 = kappa * c_m / (1.0 / K2 - c_s)
     e3 = kappa * c_m / (1.0 / K3 - c_s)
     return kappa, e2, e3
+
+
+class _ReadOnlyDict(dict):
+    """A dict that refuses changes and pickles (`types.MappingProxyType` does not pickle,
+    and the units travel to worker processes in studies)."""
+
+    def _refuse(self, *args, **kwargs):
+        raise TypeError("the provenance of a unit is read-only; build a new unit instead")
+
+    __setitem__ = __delitem__ = __ior__ = _refuse
+    clear = pop = popitem = setdefault = update = _refuse
+
+    def __reduce__(self):
+        return type(self), (dict(self),)
+
+    def __copy__(self):
+        return self
+
+    def __deepcopy__(self, memo):
+        return self
+
+
+def _read_only(value):
+    """A deep read-only copy: dicts become `_ReadOnlyDict`, lists tuples."""
+    if isinstance(value, dict):
+        return _ReadOnlyDict({k: _read_only(v) for k, v in value.items()})
+    if isinstance(value, (list, tuple)):
+        return tuple(_read_only(v) for v in value)
+    return value
 
 
 @functools.cache
@@ -105,11 +199,29 @@ def _build(name: str) -> HarmonicDrive:
                              slip_max=arcmin_to_rad(fxd["slip_arcmin"])),
         damping=fx.ViscousDamping(coefficient=2.0 * bench["damping_ratio"] * np.sqrt(K1 * J_out)),
         kinematic_error=kinematic_error,
-        provenance={"catalog": entry, "calibration": {"kappa_mesh": kappa, "e2": e2, "e3": e3},
-                    "geometry": "assumed proportions, hdsim/data/units.toml"},
+        # the unit is cached and every model derived from it shares this mapping
+        provenance=_read_only({"catalog": entry,
+                               "calibration": {"kappa_mesh": kappa, "e2": e2, "e3": e3},
+                               "geometry": "assumed proportions, hdsim/data/units.toml"}),
     )
 
 
 def load_unit(name: str | None = None) -> HarmonicDrive:
-    """The built-in unit ``name`` (default CSG-25-100) with its default effects."""
+    """A built-in unit with its default effects.
+
+    Parameters
+    ----------
+    name : str, optional
+        Unit name; default `default_unit` (CSG-25-100).
+
+    Returns
+    -------
+    HarmonicDrive
+        The calibrated model (cached: the same object for the same name).
+
+    Raises
+    ------
+    InputError
+        On an unknown name.
+    """
     return _build(name or default_unit())

@@ -15,6 +15,7 @@ from typing import ClassVar
 import numpy as np
 
 from hdsim.model import effects as fx
+from hdsim.model.parameters import Parameters, param
 from hdsim.errors import InputError, unknown_name
 from hdsim.model.geometry import FlexsplineGeometry
 from hdsim.physics import compliance as cc
@@ -23,25 +24,25 @@ SLOTS = ("hardening", "backlash", "friction", "damping", "kinematic_error")
 
 
 @dataclass(frozen=True, eq=False)
-class WaveGenerator(fx.Parameters):
+class WaveGenerator(Parameters):
     """Wave generator data that set the radial support of the teeth."""
 
-    k_bearing: float = fx.param("radial stiffness of the WG bearing per engagement zone", "N/m",
+    k_bearing: float = param("radial stiffness of the WG bearing per engagement zone", "N/m",
                                 positive=True)
-    balls: float = fx.param("ball count of the WG bearing", "-", 3, 200)
-    engagement_fraction: float = fx.param(
+    balls: float = param("ball count of the WG bearing", "-", 3, 200)
+    engagement_fraction: float = param(
         "circumference share of one engagement zone at light load", "-", 0.01, 0.5)
     prefix: ClassVar[str] = "wave_generator"
 
 
 @dataclass(frozen=True, eq=False)
-class DriveData(fx.Parameters):
+class DriveData(Parameters):
     """Ratio, rating and inertias of the drive on its test bench."""
 
-    ratio: float = fx.param("transmission ratio N (output turns 1/N per WG turn)", "-", -1e4, 1e4)
-    rated_torque: float = fx.param("rated output torque T_N", "N·m", positive=True)
-    J_in: float = fx.param("inertia on the wave-generator shaft (motor + WG)", "kg·m²", positive=True)
-    J_out: float = fx.param("inertia on the output (flange + load fixture)", "kg·m²", positive=True)
+    ratio: float = param("transmission ratio N (output turns 1/N per WG turn)", "-", -1e4, 1e4)
+    rated_torque: float = param("rated output torque T_N", "N·m", positive=True)
+    J_in: float = param("inertia on the wave-generator shaft (motor + WG)", "kg·m²", positive=True)
+    J_out: float = param("inertia on the output (flange + load fixture)", "kg·m²", positive=True)
     prefix: ClassVar[str] = "drive"
 
     def __post_init__(self):
@@ -51,7 +52,7 @@ class DriveData(fx.Parameters):
 
 
 @dataclass(frozen=True, eq=False)
-class Calibration(fx.Parameters):
+class Calibration(Parameters):
     """Per-unit calibration of the closed forms against the catalog (see docs/physics.md).
 
     ``kappa_mesh`` multiplies the closed-form mesh-zone compliance so that the nominal
@@ -59,7 +60,7 @@ class Calibration(fx.Parameters):
     unit is built: a change of geometry acts through the closed forms, not through it.
     """
 
-    kappa_mesh: float = fx.param("mesh-zone compliance factor", "-", 1e-3, 1e3)
+    kappa_mesh: float = param("mesh-zone compliance factor", "-", 1e-3, 1e3)
     prefix: ClassVar[str] = "calibration"
 
 
@@ -160,7 +161,7 @@ class HarmonicDrive:
 
     def active_families(self) -> list[str]:
         """Families whose slot holds an effect other than "none"."""
-        return [slot for slot in SLOTS if getattr(self, slot).id != "none"]
+        return [slot for slot in SLOTS if not getattr(self, slot).is_null]
 
     def with_effects(self, **slots) -> "HarmonicDrive":
         """A new model with slots replaced, e.g. ``with_effects(backlash=DeadZoneBacklash(gap=1e-4))``."""

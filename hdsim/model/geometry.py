@@ -78,13 +78,44 @@ class FlexsplineGeometry:
         return self.cup_length - self.R_k - self.R_v - self.undercut_width - self.face_width
 
     def replace(self, **changes) -> "FlexsplineGeometry":
+        """A copy with some fields changed (checked again).
+
+        Parameters
+        ----------
+        **changes : float or numpy.ndarray
+            Field name -> new value [m, Pa or -, as the field].
+
+        Returns
+        -------
+        FlexsplineGeometry
+            The new geometry.
+
+        Raises
+        ------
+        InputError
+            If the new geometry fails `validate_geometry`.
+        """
         return replace(self, **changes)
 
     @classmethod
     def design_names(cls) -> tuple[str, ...]:
+        """Names of the five design dimensions of the seed paper.
+
+        Returns
+        -------
+        tuple of str
+            ``('h_pz', 'h_c', 'R_v', 'R_k', 'h_p')``.
+        """
         return tuple(f.name for f in fields(cls) if f.metadata["design"])
 
     def as_dict(self) -> dict:
+        """Every field by name.
+
+        Returns
+        -------
+        dict
+            Field name -> value [m, Pa or -].
+        """
         return {f.name: getattr(self, f.name) for f in fields(self)}
 
 
@@ -105,7 +136,21 @@ def _fail(message: str, index: int | None, batched: bool) -> None:
 
 
 def validate_geometry(g: FlexsplineGeometry) -> None:
-    """Refuse shapes that cannot be built or that break the thin-shell closed forms."""
+    """Refuse shapes that cannot be built or that break the thin-shell closed forms.
+
+    Parameters
+    ----------
+    g : FlexsplineGeometry
+        The geometry (a batch is checked sample by sample).
+
+    Raises
+    ------
+    InputError
+        Naming the first offending sample of a batch, for: a field that is not a positive
+        finite number, an undercut deeper than the rim wall, ν ≥ 0.5, walls thicker than
+        10 % of the bore radius, an end radius that does not fit between hub and
+        cylinder, or no plain cylinder left in the cup.
+    """
     values = {f.name: np.asarray(getattr(g, f.name), dtype=float) for f in fields(g)}
     batched = any(v.ndim > 0 for v in values.values())
     for name, v in values.items():

@@ -17,18 +17,18 @@ The periodic part *modulates the magnitude* of the Coulomb/Stribeck level instea
 adding ``Σ a_k sin(kθ + φ_k)`` as Ghorbel et al. write it: an additive term of fixed
 sign is a conservative cogging torque (it returns in one half-turn what it takes in
 the other) and would make the friction deliver power; the modulated form is
-dissipative for ``Σ|r_k| < 1`` and reproduces the per-direction position maps of
-measured strain-wave friction (reference §6, ``harivin/harmonic-drive-actuator``).
+dissipative for ``Σ|r_k| < 1`` (docs/tutorial-kinematic-error.md, section 6).
 The law is memoryless (the Stribeck curve is a function of speed), so it adds no ODE
 state; ``ω_ε`` is the only regularisation.
 
 **Where the parameters live.** `hdsim.model.drive.HarmonicDrive` has no slot for
 input friction, so it is *not* a model parameter: `for_unit` builds an
 `InputFriction` from the catalog numbers in ``hdsim/data/input_friction.toml``
-(starting torque and no-load running torque at 2000 rpm, reference table 2.4), and a
-driven scenario may override any field in its ``[input_friction]`` table
-(``model = "none"`` switches it off). Efficiency under load (the mesh losses that grow
-with torque) is not modelled: the no-load running torque is the only loss on the input.
+(starting torque and no-load running torque at 2000 rpm, from the Schaeffler
+RT1-H-CS catalog, i = 100, +20 °C), and a driven scenario may override any field in
+its ``[input_friction]`` table (``model = "none"`` switches it off). Efficiency under
+load (the mesh losses that grow with torque) is not modelled: the no-load running
+torque is the only loss on the input.
 """
 
 from __future__ import annotations
@@ -76,25 +76,76 @@ class InputFriction:
                              "(the friction level must stay positive)")
 
     def modulation(self, angle):
-        """Position factor ``m(θ) = 1 + Σ r_k cos(kθ + φ_k)`` of the Coulomb/Stribeck level."""
+        """Position factor ``m(θ) = 1 + Σ r_k cos(kθ + φ_k)`` of the Coulomb/Stribeck level.
+
+        Parameters
+        ----------
+        angle : float or array
+            WG angle θ [rad].
+
+        Returns
+        -------
+        float or array
+            m(θ) [-].
+        """
         m = 1.0
         for k, r, p in zip(self.ripple_orders, self.ripple_amplitudes, self.ripple_phases):
             m = m + r * np.cos(k * angle + p)
         return m
 
     def torque(self, speed, angle):
-        """Friction torque [N·m] opposing the WG speed ``speed`` [rad/s] at WG angle ``angle``."""
+        """Friction torque opposing the WG speed.
+
+        Parameters
+        ----------
+        speed : float or array
+            WG speed ω [rad/s].
+        angle : float or array
+            WG angle θ [rad].
+
+        Returns
+        -------
+        float or array
+            Friction torque [N·m].
+        """
         level = stribeck(speed, self.coulomb_torque, self.starting_torque, self.stribeck_speed, 0.0,
                          self.velocity_scale)
         return self.modulation(angle) * level + self.viscous * speed
 
     def running_torque(self, speed):
-        """Mean friction over a WG revolution at constant ``speed`` [rad/s] (ripple averages out)."""
+        """Mean friction over a WG revolution at constant speed (the ripple averages out).
+
+        Parameters
+        ----------
+        speed : float or array
+            WG speed [rad/s].
+
+        Returns
+        -------
+        float or array
+            Running torque [N·m].
+        """
         return stribeck(speed, self.coulomb_torque, self.starting_torque, self.stribeck_speed,
                         self.viscous, self.velocity_scale)
 
     def with_updates(self, **changes) -> "InputFriction":
-        """A copy with fields changed (names checked)."""
+        """A copy with fields changed (names checked).
+
+        Parameters
+        ----------
+        **changes
+            Field name -> new value, in the field's unit.
+
+        Returns
+        -------
+        InputFriction
+            The new friction law.
+
+        Raises
+        ------
+        InputError
+            On an unknown field name or a value out of range.
+        """
         known = {f.name for f in fields(self)}
         for name in changes:
             if name not in known:
@@ -115,8 +166,26 @@ def from_catalog(starting_torque: float, running_torque: float, running_speed: f
     """Input friction that reproduces a catalog starting torque and no-load running torque.
 
     ``F_s`` = starting torque; ``F_c = coulomb_share·F_s``; the viscous coefficient makes
-    ``F_c + b·ω`` equal the running torque at ``running_speed`` [rad/s] (the Stribeck
-    term has died out there).
+    ``F_c + b·ω`` equal the running torque at ``running_speed`` (the Stribeck term has
+    died out there).
+
+    Parameters
+    ----------
+    starting_torque : float
+        Catalog starting torque on the input [N·m].
+    running_torque : float
+        Catalog no-load running torque on the input at ``running_speed`` [N·m].
+    running_speed : float
+        WG speed of the running torque [rad/s]; default 2000 rpm.
+    **shape
+        Overrides of the assumed shape (``[shape]`` in hdsim/data/input_friction.toml):
+        ``coulomb_share`` [-], ``stribeck_speed`` [rad/s], ``velocity_scale`` [rad/s],
+        ``ripple_orders`` [-], ``ripple_amplitudes`` [-], ``ripple_phases`` [rad].
+
+    Returns
+    -------
+    InputFriction
+        The friction law.
     """
     defaults = dict(_data()["shape"])
     defaults.update(shape)
@@ -130,11 +199,22 @@ def from_catalog(starting_torque: float, running_torque: float, running_speed: f
 
 
 def catalog_values(model) -> dict:
-    """Starting and running torque [N·m] for ``model``'s unit.
+    """Starting and running torque for a model's unit.
 
     Built-in units use their table; any other model (a fitted or renamed unit) takes
-    the size-25 values scaled by its rated torque relative to 87 N·m (reference
-    table 2.4 grows roughly in proportion with T_N), and is marked so.
+    the size-25 values scaled by its rated torque relative to 87 N·m (the catalog values
+    grow roughly in proportion with T_N), and is marked so.
+
+    Parameters
+    ----------
+    model : HarmonicDrive
+        The model; its ``name`` selects the table row.
+
+    Returns
+    -------
+    dict
+        ``starting_torque`` and ``running_torque_2000rpm`` [N·m], ``source`` and, for a
+        derived entry, ``status``.
     """
     units = _data()["units"]
     if model.name in units:
@@ -149,11 +229,27 @@ def catalog_values(model) -> dict:
 
 
 def for_unit(model, overrides: dict | None = None) -> InputFriction:
-    """The input friction of ``model``'s unit, with a scenario's ``[input_friction]`` overrides.
+    """The input friction of a model's unit, with a scenario's ``[input_friction]`` overrides.
 
-    ``overrides`` keys: ``model`` ("catalog" | "none"), ``starting_torque_Nm``,
-    ``running_torque_Nm`` (at 2000 rpm), ``coulomb_share``, ``stribeck_speed_rpm``,
-    ``viscous_Nms``, ``ripple_orders``, ``ripple_amplitudes``, ``ripple_phases``.
+    Parameters
+    ----------
+    model : HarmonicDrive
+        The model whose catalog values are used (`catalog_values`).
+    overrides : dict, optional
+        ``model`` (``"catalog"`` or ``"none"``), ``starting_torque_Nm`` [N·m],
+        ``running_torque_Nm`` [N·m] (at 2000 rpm), ``coulomb_share`` [-],
+        ``stribeck_speed_rpm`` [rpm], ``viscous_Nms`` [N·m·s/rad], ``ripple_orders`` [-],
+        ``ripple_amplitudes`` [-], ``ripple_phases`` [rad].
+
+    Returns
+    -------
+    InputFriction
+        The friction law; `NO_INPUT_FRICTION` for ``model = "none"``.
+
+    Raises
+    ------
+    InputError
+        On an unknown key or model, or a value out of range.
     """
     overrides = dict(overrides or {})
     kind = overrides.pop("model", "catalog")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 
 def load_dependent_coefficient(coefficient, stiffness_share, tangent_ratio):
-    """Viscous coefficient ``c₀ [(1 − s) + s K_t/K₀]`` [N·m·s/rad] at tangent stiffness ``K_t``.
+    """Viscous coefficient ``c₀ [(1 − s) + s K_t/K₀]`` at tangent stiffness ``K_t``.
 
     Parameters
     ----------
@@ -16,5 +16,10 @@ def load_dependent_coefficient(coefficient, stiffness_share, tangent_ratio):
         Chopra, *Dynamics of Structures*, §11.4). ``s = 0`` is a constant coefficient.
     tangent_ratio : float or array
         ``K_t/K₀``, the tangent stiffness of the spring relative to its zero-twist value [-].
+
+    Returns
+    -------
+    float or array
+        Viscous coefficient [N·m·s/rad].
     """
     return coefficient * (1.0 - stiffness_share + stiffness_share * tangent_ratio)

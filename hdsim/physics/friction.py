@@ -6,12 +6,50 @@ import numpy as np
 
 
 def smooth_coulomb(velocity, coulomb_torque, velocity_scale):
-    """Coulomb friction smoothed by tanh: ``F_c tanh(v / v_s)`` [N·m]."""
+    """Coulomb friction smoothed by tanh: ``F_c tanh(v / v_s)``.
+
+    Parameters
+    ----------
+    velocity : float or array
+        Sliding velocity v [rad/s].
+    coulomb_torque : float or array
+        Coulomb level F_c [N·m].
+    velocity_scale : float or array
+        Smoothing velocity v_s [rad/s], > 0.
+
+    Returns
+    -------
+    float or array
+        Friction torque [N·m].
+    """
     return coulomb_torque * np.tanh(velocity / velocity_scale)
 
 
 def stribeck(velocity, coulomb_torque, static_torque, stribeck_velocity, viscous, velocity_scale):
-    """Coulomb + Stribeck + viscous friction [N·m] (Armstrong-Hélouvry, 1991)."""
+    """Coulomb + Stribeck + viscous friction (Armstrong-Hélouvry, 1991).
+
+    ``[F_c + (F_s − F_c) exp(−(v/v_St)²)] tanh(v/v_s) + b v``.
+
+    Parameters
+    ----------
+    velocity : float or array
+        Sliding velocity v [rad/s].
+    coulomb_torque : float or array
+        Coulomb level F_c [N·m].
+    static_torque : float or array
+        Breakaway level F_s [N·m].
+    stribeck_velocity : float or array
+        Stribeck velocity v_St [rad/s].
+    viscous : float or array
+        Viscous coefficient b [N·m·s/rad].
+    velocity_scale : float or array
+        Smoothing velocity v_s of the sign [rad/s], > 0.
+
+    Returns
+    -------
+    float or array
+        Friction torque [N·m].
+    """
     level = coulomb_torque + (static_torque - coulomb_torque) * np.exp(-(velocity / stribeck_velocity) ** 2)
     return level * np.tanh(velocity / velocity_scale) + viscous * velocity
 
@@ -19,8 +57,23 @@ def stribeck(velocity, coulomb_torque, static_torque, stribeck_velocity, viscous
 def dahl_slope(state, direction, stiffness, saturation):
     """Dahl model slope ``dz/dx = σ (1 − z/z_max · d)``, floored at 0 (Dahl, 1968).
 
-    ``direction`` is the sign of the motion, ``d = sgn ẋ``, or a smooth stand-in for it
-    in [−1, 1]. The floor only acts on a state pushed past saturation by round-off.
+    The floor only acts on a state pushed past saturation by round-off.
+
+    Parameters
+    ----------
+    state : float or array
+        Friction state z (a torque [N·m] or a twist [rad], see `dahl_rate`).
+    direction : float or array
+        Sign of the motion, ``d = sgn ẋ``, or a smooth stand-in for it in [−1, 1].
+    stiffness : float or array
+        Rest stiffness σ (units of z per unit of x).
+    saturation : float or array
+        Saturation level z_max (units of z).
+
+    Returns
+    -------
+    float or array
+        dz/dx (units of σ).
     """
     return stiffness * np.maximum(1.0 - state / saturation * direction, 0.0)
 
@@ -30,25 +83,67 @@ def dahl_rate(state, velocity, stiffness, saturation):
 
     Used in torque form (z a torque, σ [N·m/rad]) and in compliance form (z a twist,
     σ = 1/k [rad/(N·m)] driven by a torque rate); the law is the same.
+
+    Parameters
+    ----------
+    state : float or array
+        Friction state z.
+    velocity : float or array
+        Rate of the driving variable v ([rad/s], or [N·m/s] in compliance form).
+    stiffness : float or array
+        Rest stiffness σ.
+    saturation : float or array
+        Saturation level z_max.
+
+    Returns
+    -------
+    float or array
+        ż (units of z per second).
     """
     return dahl_slope(state, np.sign(velocity), stiffness, saturation) * velocity
 
 
 def dahl_slip_rates(slips, twist_rate, elastic_tangent, elastic_torque, slip_torques, slip_maxes,
                     stiffnesses, stop_width, velocity_scale):
-    """Slip rates [rad/s] of Dahl-friction sliders with end stops, in series with the spring.
+    """Slip rates of Dahl-friction sliders with end stops, in series with the spring.
 
     Micro-slip of the teeth as ``n`` sliders in series (element axis first). Slider
     ``i`` sticks (stiffness σ_i) until the torque through it nears ``F_i``, then slides
     until it meets a stop at ``±s_max,i`` (stiffness k_i = σ_i). Its friction torque is
     what its stops do not carry, ``z_i = T − k_i·dz(s_i)``, and obeys Dahl's law
     (Dahl, 1968) in the slip: ``dz/ds = σ (1 − z/F sgn ṡ)`` (sgn smoothed as tanh over
-    ``velocity_scale`` [rad/s], far below test twist rates). Its tangent stiffness is
+    ``velocity_scale``, far below test twist rates). Its tangent stiffness is
     ``D_i = σ_i (1 − z_i/F_i sgn ṡ) + k_i·contact(s_i)``.
 
     Spring (tangent ``K_t``) and sliders carry the same torque, so compliances add:
     ``Ṫ = δ̇ / (1/K_t + Σ 1/D_j)`` and ``ṡ_i = Ṫ / D_i``. A freely sliding element
     (D_i → 0) takes the whole twist rate; in a backlash gap (K_t = 0) nothing slips.
+
+    Parameters
+    ----------
+    slips : array
+        Slip of each slider s_i, element axis first [rad].
+    twist_rate : float or array
+        Twist rate of the whole chain δ̇ [rad/s].
+    elastic_tangent : float or array
+        Tangent stiffness of the spring K_t [N·m/rad].
+    elastic_torque : float or array
+        Torque through the chain T [N·m].
+    slip_torques : array
+        Slip torque of each slider F_i [N·m].
+    slip_maxes : array
+        Stop position of each slider s_max,i [rad].
+    stiffnesses : array
+        Stick and stop stiffness of each slider σ_i = k_i [N·m/rad].
+    stop_width : float or array
+        Rounding width of the stops [rad].
+    velocity_scale : float or array
+        Smoothing velocity of the sign [rad/s].
+
+    Returns
+    -------
+    numpy.ndarray
+        Slip rate of each slider, element axis first [rad/s].
     """
     from hdsim.physics.backlash import smooth_contact, smooth_dead_zone
 
@@ -65,13 +160,30 @@ def dahl_slip_rates(slips, twist_rate, elastic_tangent, elastic_torque, slip_tor
 
 
 def maxwell_slip_rates(deflections, velocity, stiffnesses, slip_torques, velocity_scale):
-    """Maxwell-slip element deflection rates [rad/s] (Lampaert, Al-Bender & Swevers, 2003).
+    """Maxwell-slip element deflection rates (Lampaert, Al-Bender & Swevers, 2003).
 
     Each element is a spring ``k_i`` in series with a slider ``f_i``: it sticks
     (``ż_i = v``) until ``k_i |z_i| = f_i`` and then slides (``ż_i = 0`` while pushed
     outward). The switch is smoothed over ``velocity_scale`` relative to the
-    saturation to keep the right-hand side continuous. ``deflections`` has the
-    element axis first.
+    saturation to keep the right-hand side continuous.
+
+    Parameters
+    ----------
+    deflections : array
+        Spring deflection of each element z_i, element axis first [rad].
+    velocity : float or array
+        Twist rate v [rad/s].
+    stiffnesses : array
+        Spring stiffness of each element k_i [N·m/rad].
+    slip_torques : array
+        Slip torque of each element f_i [N·m].
+    velocity_scale : float or array
+        Smoothing velocity [rad/s].
+
+    Returns
+    -------
+    numpy.ndarray
+        Deflection rate of each element [rad/s].
     """
     load = stiffnesses * deflections / slip_torques
     outward = 0.5 * (1.0 + np.tanh(velocity / velocity_scale)) * np.clip(load, 0, None) \
@@ -81,5 +193,18 @@ def maxwell_slip_rates(deflections, velocity, stiffnesses, slip_torques, velocit
 
 
 def maxwell_slip_torque(deflections, stiffnesses):
-    """Total Maxwell-slip torque ``Σ k_i z_i`` [N·m]."""
+    """Total Maxwell-slip torque ``Σ k_i z_i``.
+
+    Parameters
+    ----------
+    deflections : array
+        Spring deflection of each element, element axis first [rad].
+    stiffnesses : array
+        Spring stiffness of each element [N·m/rad].
+
+    Returns
+    -------
+    float or numpy.ndarray
+        Torque [N·m].
+    """
     return np.sum(stiffnesses * deflections, axis=0)

@@ -10,12 +10,25 @@ import numpy as np
 
 
 def three_segment_twist(torque, T1, T2, K1, K2, K3):
-    """Catalog three-segment law: twist [rad] at output torque ``torque`` [N·m].
+    """Catalog three-segment law: twist at output torque ``torque``.
 
     φ = T/K1 (|T| ≤ T1); T1/K1 + (|T|−T1)/K2 (T1 < |T| ≤ T2); and
     T1/K1 + (T2−T1)/K2 + (|T|−T2)/K3 beyond, with the sign of T restored.
     Harmonic Drive LLC CSF/CSG catalog p. 48; HD AG CSD-2A manual.
-    Stiffnesses in [N·m/rad], torques in [N·m].
+
+    Parameters
+    ----------
+    torque : float or array
+        Output torque T [N·m].
+    T1, T2 : float or array
+        Breakpoint torques [N·m].
+    K1, K2, K3 : float or array
+        Stiffness of the three segments [N·m/rad].
+
+    Returns
+    -------
+    float or array
+        Twist [rad].
     """
     a = np.abs(torque)
     phi = (np.minimum(a, T1) / K1
@@ -25,7 +38,22 @@ def three_segment_twist(torque, T1, T2, K1, K2, K3):
 
 
 def three_segment_torque(twist, T1, T2, K1, K2, K3):
-    """Inverse of `three_segment_twist`: torque [N·m] at twist [rad]."""
+    """Inverse of `three_segment_twist`: torque at a twist.
+
+    Parameters
+    ----------
+    twist : float or array
+        Twist [rad].
+    T1, T2 : float or array
+        Breakpoint torques [N·m].
+    K1, K2, K3 : float or array
+        Stiffness of the three segments [N·m/rad].
+
+    Returns
+    -------
+    float or array
+        Torque [N·m].
+    """
     a = np.abs(twist)
     phi1 = T1 / K1
     phi2 = phi1 + (T2 - T1) / K2
@@ -46,11 +74,27 @@ def _sigmoid(x, width):
 
 
 def smooth_three_segment_torque(twist, T1, T2, K1, K2, K3, width):
-    """Three-segment law with its two knees rounded over ``width`` [rad] (softplus).
+    """Three-segment law with its two knees rounded over ``width`` (softplus).
 
     Away from the knees it equals `three_segment_torque` to within
     ``(K_{i+1}−K_i)·width·e^{-|φ−φ_i|/width}``. The rounding keeps the right-hand side
     differentiable, which an implicit solver needs to take long steps.
+
+    Parameters
+    ----------
+    twist : float or array
+        Twist [rad].
+    T1, T2 : float or array
+        Breakpoint torques [N·m].
+    K1, K2, K3 : float or array
+        Stiffness of the three segments [N·m/rad].
+    width : float or array
+        Rounding width of the knees [rad], > 0.
+
+    Returns
+    -------
+    float or array
+        Torque [N·m].
     """
     a = np.abs(twist)
     phi1 = T1 / K1
@@ -60,7 +104,24 @@ def smooth_three_segment_torque(twist, T1, T2, K1, K2, K3, width):
 
 
 def smooth_three_segment_tangent(twist, T1, T2, K1, K2, K3, width):
-    """Tangent stiffness [N·m/rad] of `smooth_three_segment_torque`."""
+    """Tangent stiffness of `smooth_three_segment_torque`.
+
+    Parameters
+    ----------
+    twist : float or array
+        Twist [rad].
+    T1, T2 : float or array
+        Breakpoint torques [N·m].
+    K1, K2, K3 : float or array
+        Stiffness of the three segments [N·m/rad].
+    width : float or array
+        Rounding width of the knees [rad], > 0.
+
+    Returns
+    -------
+    float or array
+        dT/dφ [N·m/rad].
+    """
     a = np.abs(twist)
     phi1 = T1 / K1
     phi2 = phi1 + (T2 - T1) / K2
@@ -68,7 +129,22 @@ def smooth_three_segment_tangent(twist, T1, T2, K1, K2, K3, width):
 
 
 def three_segment_tangent(twist, T1, T2, K1, K2, K3):
-    """Tangent stiffness dT/dφ [N·m/rad] of the three-segment law at ``twist``."""
+    """Tangent stiffness dT/dφ of the three-segment law.
+
+    Parameters
+    ----------
+    twist : float or array
+        Twist [rad].
+    T1, T2 : float or array
+        Breakpoint torques [N·m].
+    K1, K2, K3 : float or array
+        Stiffness of the three segments [N·m/rad].
+
+    Returns
+    -------
+    float or array
+        dT/dφ [N·m/rad].
+    """
     a = np.abs(twist)
     phi1 = T1 / K1
     phi2 = phi1 + (T2 - T1) / K2
@@ -79,13 +155,46 @@ def tanh_hardening_torque(twist, K0, K_inf, twist_scale):
     """Smooth hardening: ``T = K∞ φ − (K∞ − K0) φ_s tanh(φ/φ_s)``.
 
     Tangent stiffness rises smoothly from ``K0`` at zero twist to ``K∞`` well beyond
-    ``φ_s`` [rad]; a smooth alternative to the three-segment law.
+    ``φ_s``; a smooth alternative to the three-segment law.
+
+    Parameters
+    ----------
+    twist : float or array
+        Twist φ [rad].
+    K0 : float or array
+        Stiffness at zero twist [N·m/rad].
+    K_inf : float or array
+        Stiffness at large twist K∞ [N·m/rad].
+    twist_scale : float or array
+        Twist over which the stiffness rises, φ_s [rad], > 0.
+
+    Returns
+    -------
+    float or array
+        Torque [N·m].
     """
     return K_inf * twist - (K_inf - K0) * twist_scale * np.tanh(twist / twist_scale)
 
 
 def tanh_hardening_tangent(twist, K0, K_inf, twist_scale):
-    """Tangent stiffness [N·m/rad] of `tanh_hardening_torque`."""
+    """Tangent stiffness of `tanh_hardening_torque`.
+
+    Parameters
+    ----------
+    twist : float or array
+        Twist φ [rad].
+    K0 : float or array
+        Stiffness at zero twist [N·m/rad].
+    K_inf : float or array
+        Stiffness at large twist [N·m/rad].
+    twist_scale : float or array
+        Twist over which the stiffness rises [rad], > 0.
+
+    Returns
+    -------
+    float or array
+        dT/dφ [N·m/rad].
+    """
     return K_inf - (K_inf - K0) / np.cosh(twist / twist_scale) ** 2
 
 
@@ -93,11 +202,24 @@ def fit_three_segment(torque, twist, T1, T2):
     """Least-squares fit of the three-segment law with a free twist offset.
 
     Fits ``φ = φ0 + a1 T + a2 (T−T1)₊ + a3 (T−T2)₊`` (continuous, knots at the
-    catalog breakpoints) to samples of one loading branch with ``torque ≥ 0``.
-    Returns ``(K1, K2, K3, φ0)`` with ``K1 = 1/a1``, ``K2 = 1/(a1+a2)``,
-    ``K3 = 1/(a1+a2+a3)``. The free offset lets the fit ignore a backlash step
-    or a hysteresis offset at the start of the branch. A segment with no samples
-    (e.g. T_max ≤ T2) returns NaN for its stiffness.
+    catalog breakpoints) to samples of one loading branch, with ``K1 = 1/a1``,
+    ``K2 = 1/(a1+a2)``, ``K3 = 1/(a1+a2+a3)``. The free offset lets the fit ignore a
+    backlash step or a hysteresis offset at the start of the branch.
+
+    Parameters
+    ----------
+    torque : array_like
+        Torque of one loading branch, ``torque ≥ 0`` [N·m].
+    twist : array_like
+        Twist at those torques [rad].
+    T1, T2 : float
+        Catalog breakpoint torques [N·m].
+
+    Returns
+    -------
+    tuple of float
+        ``(K1, K2, K3, φ0)``: stiffnesses [N·m/rad] and twist offset [rad]. A segment
+        with no samples (e.g. T_max ≤ T2) gives NaN for its stiffness.
     """
     T = np.asarray(torque, dtype=float)
     phi = np.asarray(twist, dtype=float)

@@ -7,14 +7,11 @@ figure. Angles at the output in arcsec (deviations) or degrees, torques in N·m.
 
 from __future__ import annotations
 
-import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg", force=False)
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from hdsim.plotting.locked import _axes  # noqa: E402
-from hdsim.units import rad_to_arcsec  # noqa: E402
+from hdsim.plotting import axes_for as _axes
+from hdsim.units import rad_to_arcsec
 
 
 def _ratio(run) -> float:
@@ -22,7 +19,24 @@ def _ratio(run) -> float:
 
 
 def plot_deviation(run, ax=None, sample: int = 0):
-    """Deviation θ_out − θ_WG/N against output angle over the measured passes (or against time)."""
+    """Deviation θ_out − θ_WG/N [arcsec] against output angle over the measured passes.
+
+    Against time when the run has no ``forward``, ``reverse`` or ``constant`` window.
+
+    Parameters
+    ----------
+    run : hdsim.scenarios.run.Run
+        A driven run.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into; default a new figure.
+    sample : int
+        Sample of a batch.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     fig, ax = _axes(ax, figsize=(8.0, 4.0))
     s, t = run.result.signals, run.result.t
     windows = run.result.metadata.get("windows", {})
@@ -46,10 +60,24 @@ def plot_deviation(run, ax=None, sample: int = 0):
 
 
 def plot_driven_time(run, sample: int = 0):
-    """Angles, deviation and following error, torques against time."""
+    """Angles [deg], deviation and following error [arcsec], torques [N·m] against time [s].
+
+    Parameters
+    ----------
+    run : hdsim.scenarios.run.Run
+        A driven run.
+    sample : int
+        Sample of a batch.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Three stacked axes.
+    """
     s, t = run.result.signals, run.result.t
     N = _ratio(run)
-    fig, axes = plt.subplots(3, 1, figsize=(8.0, 7.0), sharex=True, layout="constrained")
+    fig = Figure(figsize=(8.0, 7.0), layout="constrained")
+    axes = fig.subplots(3, 1, sharex=True)
     axes[0].plot(t, np.rad2deg(s["output_angle_rad"][sample]), "C0", label="output")
     axes[0].plot(t, np.rad2deg(s["reference_angle_rad"][sample] / N), "k--", lw=0.8, label="command / N")
     axes[0].set_ylabel("angle [deg]")

@@ -1,31 +1,40 @@
-"""Figures of a locked-wave-generator run (matplotlib, Agg-safe).
+"""Figures of a locked-wave-generator run.
 
-Each function takes a `hdsim.scenarios.run.Run` (sample 0 of a batch) and an optional
-axes, and returns the figure, so notebooks and the CLI share one code path.
-Angles are shown in arcmin, torques in N·m.
+Each function takes a `hdsim.scenarios.run.Run` (sample 0 of a batch) and returns a
+`matplotlib.figure.Figure`, so notebooks and the CLI share one code path; `plot_loop`
+draws into the axes it is given. No pyplot, no backend (see `hdsim.plotting`). Angles
+are shown in arcmin, torques in N·m.
 """
 
 from __future__ import annotations
 
-import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg", force=False)
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from hdsim.units import rad_to_arcmin  # noqa: E402
-
-
-def _axes(ax, figsize=(6.4, 4.2)):
-    if ax is None:
-        fig, ax = plt.subplots(figsize=figsize, layout="constrained")
-        return fig, ax
-    return ax.figure, ax
+from hdsim.plotting import axes_for
+from hdsim.units import rad_to_arcmin
 
 
 def plot_loop(run, ax=None, window_fraction: float = 0.04, sample: int = 0):
-    """Torque against twist (the hysteresis loop), with the ±4 % T_N window shaded."""
-    fig, ax = _axes(ax)
+    """Torque against twist (the hysteresis loop), with the ±4 % T_N window shaded.
+
+    Parameters
+    ----------
+    run : hdsim.scenarios.run.Run
+        A finished locked-wave-generator run.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into; None makes a new figure.
+    window_fraction : float
+        Half height of the shaded torque window as a fraction of T_N [-].
+    sample : int
+        Which sample of a batch run to draw.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure holding the axes.
+    """
+    fig, ax = axes_for(ax)
     torque = run.result.signal("torque_Nm", sample)
     twist = rad_to_arcmin(run.result.signal("twist_rad", sample))
     rated = float(np.asarray(run.model.drive.rated_torque).reshape(-1)[sample])
@@ -48,8 +57,22 @@ def plot_loop(run, ax=None, window_fraction: float = 0.04, sample: int = 0):
 
 
 def plot_time(run, sample: int = 0):
-    """Torque and twist against time, one above the other."""
-    fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(6.4, 4.8), layout="constrained")
+    """Torque and twist against time, one above the other.
+
+    Parameters
+    ----------
+    run : hdsim.scenarios.run.Run
+        A finished locked-wave-generator run.
+    sample : int
+        Which sample of a batch run to draw.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        A new figure with two axes.
+    """
+    fig = Figure(figsize=(6.4, 4.8), layout="constrained")
+    top, bottom = fig.subplots(2, 1, sharex=True)
     t = run.result.t
     top.plot(t, run.result.signal("torque_Nm", sample), color="C0")
     top.set_ylabel("torque [N·m]")
@@ -61,11 +84,3 @@ def plot_time(run, sample: int = 0):
     top.set_title(f"{run.model.name}: {run.scenario.name}")
     return fig
 
-
-def save(fig, path, dpi: int = 120, **savefig_options) -> None:
-    """Save a figure atomically (format from the suffix) and close it."""
-    from hdsim.io.atomic import atomic_path
-
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=dpi, format=str(path).rsplit(".", 1)[-1], **savefig_options)
-    plt.close(fig)

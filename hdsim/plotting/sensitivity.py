@@ -1,33 +1,50 @@
-"""Figures of a Sobol' study: index bars with both intervals, and convergence in N."""
+"""Figures of a Sobol' study: index bars with both intervals, and convergence in N.
+
+Each function draws a new `matplotlib.figure.Figure` without pyplot and writes it with
+`hdsim.plotting.save_figure` (see `hdsim.plotting`).
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
 
+import matplotlib
 import numpy as np
+from matplotlib.figure import Figure
 
-from hdsim.io.atomic import atomic_path
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")  # files only; never needs a display
-    import matplotlib.pyplot as plt
-
-    return plt
+from hdsim.plotting import save_figure
 
 
 def plot_indices(path, names, analysis: dict, analytic: dict | None = None,
                  title: str = "") -> Path:
     """Bars of S1 and ST with replicate (thick) and bootstrap (thin) intervals.
 
-    Like the seed paper's Figure 7, plus the error bars it lacked; with
-    ``analytic`` the exact values are drawn as black ticks.
+    Like Figure 7 of the seed paper (references in docs/physics.md), plus the error
+    bars it lacked; with ``analytic`` the exact values are drawn as black ticks.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Figure file; the suffix gives the format.
+    names : list of str
+        Parameter names, one bar pair each.
+    analysis : dict
+        ``S1``, ``ST`` [-] and their half widths ``S1_conf``, ``ST_conf`` (bootstrap)
+        and ``S1_conf_replicates``, ``ST_conf_replicates`` (replicates), one value per
+        name.
+    analytic : dict, optional
+        Exact ``S1`` and ``ST`` [-], one value per name.
+    title : str
+        Figure title; empty for the default.
+
+    Returns
+    -------
+    pathlib.Path
+        The written file.
     """
-    plt = _pyplot()
     x, w = np.arange(len(names)), 0.38
-    fig, ax = plt.subplots(figsize=(max(5.0, 0.9 * len(names) + 2.5), 3.6))
+    fig = Figure(figsize=(max(5.0, 0.9 * len(names) + 2.5), 3.6))
+    ax = fig.add_subplot()
     for shift, key, colour, label in ((-w / 2, "S1", "tab:blue", "first order S1"),
                                       (w / 2, "ST", "tab:orange", "total ST")):
         ax.bar(x + shift, analysis[key], w, color=colour, alpha=0.8, label=label)
@@ -44,16 +61,37 @@ def plot_indices(path, names, analysis: dict, analytic: dict | None = None,
     ax.set_title(title or "Sobol' indices (thick: replicate 95 % CI, thin: SALib bootstrap)",
                  fontsize=9)
     ax.legend(fontsize=8, frameon=False)
-    return _save(fig, path)
+    fig.tight_layout()
+    return save_figure(fig, path)
 
 
 def plot_convergence(path, names, rows: list[dict], target_width: float | None = None,
                      analytic: dict | None = None) -> Path:
-    """Indices (top) and interval full widths (bottom) against N, one figure."""
-    plt = _pyplot()
+    """Indices (top) and interval full widths (bottom) against N, one figure.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Figure file; the suffix gives the format.
+    names : list of str
+        Parameter names.
+    rows : list of dict
+        One analysis per base sample size: ``n``, ``S1``, ``ST`` [-] and their
+        half widths ``*_conf`` (bootstrap) and ``*_conf_replicates``.
+    target_width : float, optional
+        Full interval width the study aims for [-], drawn as a line.
+    analytic : dict, optional
+        Exact ``S1`` and ``ST`` [-], drawn as dotted lines.
+
+    Returns
+    -------
+    pathlib.Path
+        The written file.
+    """
     n = np.array([r["n"] for r in rows])
-    fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(6.4, 6.0))
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    fig = Figure(figsize=(6.4, 6.0))
+    top, bottom = fig.subplots(2, 1, sharex=True)
+    colours = matplotlib.rcParams["axes.prop_cycle"].by_key()["color"]
     for i, name in enumerate(names):
         c = colours[i % len(colours)]
         for key, style in (("S1", "--"), ("ST", "-")):
@@ -78,13 +116,5 @@ def plot_convergence(path, names, rows: list[dict], target_width: float | None =
     bottom.set_xlabel("base points N")
     bottom.set_ylabel("95 % CI full width [-]")
     bottom.set_title("ST interval width: solid replicates, dotted SALib bootstrap", fontsize=9)
-    return _save(fig, path)
-
-
-def _save(fig, path) -> Path:
-    path = Path(path)
     fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=120, format=path.suffix.lstrip(".") or "png")
-    _pyplot().close(fig)
-    return path
+    return save_figure(fig, path)

@@ -1,10 +1,8 @@
-"""Scenario tables of the ``driven_wave_generator`` set-up (registered in `hdsim.scenarios.scenario`).
+"""Scenario tables of the ``driven_wave_generator`` set-up (`hdsim.scenarios.driven.DRIVEN`).
 
-Kept apart from `hdsim.simulation.driven` so that the scenario module can import the
-schema without importing the simulator. Values are checked for type by
-`hdsim.scenarios.scenario`; their meaning and ranges by `hdsim.simulation.driven.bench_from_scenario`.
-Switches are strings (the scenario schema has no booleans). See
-``docs/tutorial-kinematic-error.md`` for every key.
+Values are checked for type by `hdsim.scenarios.scenario`; their meaning and ranges by
+`hdsim.scenarios.driven.bench_from_scenario`. Switches are strings (the scenario
+schema has no booleans). See docs/tutorial-kinematic-error.md for every key.
 """
 
 DRIVEN_SCHEMA = {

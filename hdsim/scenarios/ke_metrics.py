@@ -2,9 +2,9 @@
 
 Arrays carry a leading batch axis ``(M, nt)``; the WG angle may be ``(nt,)`` (a
 prescribed motion, shared by all samples) or ``(M, nt)``. Every function returns
-``(M,)`` (or a list of ``(M,)``). Definitions (``contracts.md`` §3, reference §1):
+``(M,)`` (or a list of ``(M,)``). Definitions (docs/tutorial-kinematic-error.md):
 
-- **Deviation** ``q = θ_out − θ_wg / N`` (the contract's kinematic error).
+- **Deviation** ``q = θ_out − θ_wg / N`` (the kinematic error of docs/measurements.md).
 - **Transmission accuracy**: over one output revolution without reversal, the largest
   positive plus the largest negative deviation of θ_out from θ_wg/N, i.e. the
   peak-to-peak of ``q`` over the last ``2πN`` of WG travel in the window. A constant
@@ -42,7 +42,22 @@ def order_label(order: float) -> str:
 
 
 def window_mean(t, x, window):
-    """Mean of ``x`` (M, nt) over the time ``window`` (start, end), per sample."""
+    """Mean of a signal over a time window, per sample.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (nt,)
+        Sample times [s].
+    x : numpy.ndarray, shape (M, nt)
+        The signal (any unit).
+    window : tuple
+        (start, end) [s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (M,)
+        The mean, in the unit of ``x``.
+    """
     m = _mask(t, window)
     return np.mean(np.asarray(x)[:, m], axis=1)
 
@@ -56,7 +71,26 @@ def _last_revolution(wg, mask, N):
 
 
 def transmission_accuracy(t, wg, q, window, N):
-    """Peak-to-peak of the deviation over the last output revolution in ``window`` [rad]."""
+    """Transmission accuracy: peak-to-peak of the deviation over the last output revolution in a window.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (nt,)
+        Sample times [s].
+    wg : numpy.ndarray, shape (nt,) or (M, nt)
+        WG angle [rad].
+    q : numpy.ndarray, shape (M, nt)
+        Deviation θ_out − θ_wg/N [rad].
+    window : tuple
+        (start, end) [s] of a pass without reversal.
+    N : float
+        Transmission ratio.
+
+    Returns
+    -------
+    numpy.ndarray, shape (M,)
+        Transmission accuracy [rad].
+    """
     q = np.asarray(q)
     M = q.shape[0]
     wg = _rows(wg, M)
@@ -69,7 +103,28 @@ def transmission_accuracy(t, wg, q, window, N):
 
 
 def lost_motion_on_reversal(t, wg, q, forward, reverse, points: int = 4000):
-    """Mean |q_forward(θ_wg) − q_reverse(θ_wg)| gap over the common WG angles [rad]."""
+    """Lost motion on reversal: the mean gap between the forward and reverse deviation curves.
+
+    |mean(q_forward(θ_wg) − q_reverse(θ_wg))| over the WG angles both passes cover.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (nt,)
+        Sample times [s].
+    wg : numpy.ndarray, shape (nt,) or (M, nt)
+        WG angle [rad].
+    q : numpy.ndarray, shape (M, nt)
+        Deviation [rad].
+    forward, reverse : tuple
+        (start, end) [s] of the two passes.
+    points : int
+        WG-angle grid points the curves are compared on.
+
+    Returns
+    -------
+    numpy.ndarray, shape (M,)
+        Lost motion [rad]; NaN where the passes share no WG angle.
+    """
     q = np.asarray(q)
     M = q.shape[0]
     wg = _rows(wg, M)
@@ -91,11 +146,33 @@ def lost_motion_on_reversal(t, wg, q, forward, reverse, points: int = 4000):
 
 
 def order_amplitudes(t, wg, q, window, N, orders, samples_per_rev: int = 64):
-    """Amplitude [rad] of the deviation at each order of WG rotation (list of (M,)).
+    """Amplitude of the deviation at given orders of WG rotation.
 
     The window is cut to a whole number of output revolutions of WG travel (at least
     one WG revolution if shorter), ``q`` resampled uniformly in WG angle, and each order
     projected: ``a_k = 2/n |Σ q_i exp(−j k θ_i)|`` (exact for orders on the grid).
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (nt,)
+        Sample times [s].
+    wg : numpy.ndarray, shape (nt,) or (M, nt)
+        WG angle [rad].
+    q : numpy.ndarray, shape (M, nt)
+        Deviation [rad].
+    window : tuple
+        (start, end) [s], at constant speed.
+    N : float
+        Transmission ratio.
+    orders : list of float
+        Orders of WG rotation (1/N: once per output revolution).
+    samples_per_rev : int
+        Resampling points per WG revolution.
+
+    Returns
+    -------
+    list of numpy.ndarray
+        One array of shape (M,) per order: amplitude [rad].
     """
     q = np.asarray(q)
     M = q.shape[0]
@@ -121,7 +198,30 @@ def order_amplitudes(t, wg, q, window, N, orders, samples_per_rev: int = 64):
 
 
 def order_spectrum(t, wg, q, window, N, max_order: float = 8.0, samples_per_rev: int = 64):
-    """(orders, amplitudes [rad]) of sample 0 up to ``max_order``, FFT over whole output revolutions."""
+    """Order spectrum of the deviation of sample 0, by FFT over whole output revolutions.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (nt,)
+        Sample times [s].
+    wg : numpy.ndarray, shape (nt,) or (M, nt)
+        WG angle [rad].
+    q : numpy.ndarray, shape (M, nt)
+        Deviation [rad].
+    window : tuple
+        (start, end) [s], at constant speed.
+    N : float
+        Transmission ratio.
+    max_order : float
+        Highest order of WG rotation returned.
+    samples_per_rev : int
+        Resampling points per WG revolution.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (orders of WG rotation, amplitudes [rad]).
+    """
     q = np.asarray(q)
     wg = _rows(wg, q.shape[0])
     base = _mask(t, window)
@@ -150,18 +250,47 @@ def _fft_window(t, window):
 
 
 def sweep_input_spectrum(t, u, window):
-    """Spectrum of the load deviation on the same (zero-padded) bins as `sweep_frequency_response`."""
+    """Spectrum of the input deviation on the same (zero-padded) bins as `sweep_frequency_response`.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (nt,)
+        Sample times [s]. Uniform over ``window``.
+    u : numpy.ndarray, shape (nt,)
+        Input, e.g. load torque [N·m].
+    window : tuple
+        (start, end) [s] of the sweep record.
+
+    Returns
+    -------
+    numpy.ndarray
+        Complex spectrum of ``u − u(start)`` (unit of ``u`` times s).
+    """
     m, dt = _fft_window(t, window)
     x = np.asarray(u)[m]
     return np.fft.rfft(x - x[0], 2 * x.size)
 
 
 def sweep_frequency_response(t, u, y, window):
-    """(f [Hz], H = Y/U) from a sweep that starts at rest and ends after the response decayed.
+    """Frequency response H = Y/U from a sweep that starts at rest and ends after the response decayed.
 
     Deviations from the first sample of the window (the operating point); the record is
     zero-padded to twice its length so the ratio is that of the transforms of the
     (finite) signals, not of their periodic extensions.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (nt,)
+        Sample times [s]. Uniform over ``window``.
+    u, y : numpy.ndarray, shape (nt,)
+        Input (e.g. load torque [N·m]) and output (e.g. output angle [rad]).
+    window : tuple
+        (start, end) [s] of the sweep record.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (f [Hz], H [unit of y per unit of u]).
     """
     m, dt = _fft_window(t, window)
     x = np.asarray(u)[m]
@@ -175,9 +304,26 @@ def sweep_frequency_response(t, u, y, window):
 
 
 def settling(t, err, window, band):
-    """(time after the window start until ``err`` stays within ``band`` of its final value [s],
-    peak-to-peak of ``err`` over the last half of the window [rad]: residual vibration plus
-    whatever the position loop is still pulling in)."""
+    """Settling time and residual error in a window (a dwell after a move).
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (nt,)
+        Sample times [s].
+    err : numpy.ndarray, shape (M, nt)
+        Following error [rad].
+    window : tuple
+        (start, end) [s].
+    band : float
+        Settling band [rad] around the final value.
+
+    Returns
+    -------
+    tuple of numpy.ndarray, shape (M,)
+        (time after the window start until ``err`` stays within ``band`` of its final
+        value [s], peak-to-peak of ``err`` over the last half of the window [rad]:
+        residual vibration plus whatever the position loop is still pulling in).
+    """
     err = np.asarray(err)
     m = _mask(t, window)
     tt = t[m]
@@ -194,7 +340,24 @@ def settling(t, err, window, band):
 
 
 def load_step(t, err, before, after, band):
-    """Static deflection, peak deflection and settling time [s] of a load step (per sample)."""
+    """Static deflection, peak deflection and settling time of a load step.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (nt,)
+        Sample times [s].
+    err : numpy.ndarray, shape (M, nt)
+        Output position error [rad].
+    before, after : tuple
+        (start, end) [s] before and after the step.
+    band : float
+        Settling band [rad] around the final deflection.
+
+    Returns
+    -------
+    dict
+        ``deflection`` and ``peak`` [rad], ``settling_time`` [s], each of shape (M,).
+    """
     err = np.asarray(err)
     mb, ma = _mask(t, before), _mask(t, after)
     ta = t[ma]
@@ -211,7 +374,26 @@ def load_step(t, err, before, after, band):
 
 
 def oscillation(t, ref, out, window, frequency):
-    """(gain |Y1/R1|, phase ∠(Y1/R1) [rad], peak-to-peak of out − ref [rad]) at ``frequency``."""
+    """Gain and phase of an oscillation at its frequency, and the peak-to-peak deviation.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (nt,)
+        Sample times [s].
+    ref : numpy.ndarray, shape (nt,) or (M, nt)
+        Reference output angle [rad].
+    out : numpy.ndarray, shape (M, nt)
+        Output angle [rad].
+    window : tuple
+        (start, end) [s].
+    frequency : float
+        Oscillation frequency [Hz].
+
+    Returns
+    -------
+    tuple of numpy.ndarray, shape (M,)
+        (gain |Y1/R1| [-], phase ∠(Y1/R1) [rad], peak-to-peak of out − ref [rad]).
+    """
     m = _mask(t, window)
     tt = t[m]
     basis = np.exp(-1j * TWO_PI * frequency * tt)

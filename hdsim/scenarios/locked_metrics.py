@@ -51,7 +51,22 @@ def _interp_rows(x_rows, y_rows, x0):
 
 
 def lost_motion_full_span(twist, levels, n):
-    """θ(+A) − θ(−A) at the last turning points of a cycle [rad]."""
+    """Lost motion, full span: θ(+A) − θ(−A) at the last turning points of a cycle.
+
+    Parameters
+    ----------
+    twist : numpy.ndarray, shape (M, nt)
+        Twist [rad], ``n`` samples per ramp.
+    levels : numpy.ndarray
+        The cycle's torque levels (fractions of T_N).
+    n : int
+        Samples per ramp.
+
+    Returns
+    -------
+    numpy.ndarray, shape (M,)
+        Lost motion [rad].
+    """
     amplitude = np.max(levels)
     plus = [k for k, level in enumerate(levels) if np.isclose(level, amplitude)]
     minus = [k for k, level in enumerate(levels) if np.isclose(level, -amplitude)]
@@ -70,13 +85,45 @@ def _branches(torque, twist, levels, n):
 
 
 def hysteresis_loss(torque, twist, levels, n):
-    """Twist difference at zero torque between unloading from +A and from −A [rad]."""
+    """Hysteresis loss: twist difference at zero torque between unloading from +A and from −A.
+
+    Parameters
+    ----------
+    torque, twist : numpy.ndarray, shape (M, nt)
+        Output torque [N·m] and twist [rad], ``n`` samples per ramp.
+    levels : numpy.ndarray
+        The cycle's torque levels (fractions of T_N).
+    n : int
+        Samples per ramp.
+
+    Returns
+    -------
+    numpy.ndarray, shape (M,)
+        Hysteresis loss [rad].
+    """
     (td, pd), (tu, pu) = _branches(torque, twist, levels, n)
     return _interp_rows(td, pd, 0.0) - _interp_rows(tu, pu, 0.0)
 
 
 def lost_motion_centre_line(torque, twist, levels, n, level_torque):
-    """Span of the loop mid-line between ±``level_torque`` [rad] (odd symmetry assumed)."""
+    """Lost motion, centre line: span of the loop mid-line between ±``level_torque`` (odd symmetry assumed).
+
+    Parameters
+    ----------
+    torque, twist : numpy.ndarray, shape (M, nt)
+        Output torque [N·m] and twist [rad], ``n`` samples per ramp.
+    levels : numpy.ndarray
+        The cycle's torque levels (fractions of T_N).
+    n : int
+        Samples per ramp.
+    level_torque : float or numpy.ndarray
+        The torque A of the span [N·m], per sample.
+
+    Returns
+    -------
+    numpy.ndarray, shape (M,)
+        Lost motion [rad].
+    """
     (td, pd), (tu, pu) = _branches(torque, twist, levels, n)
     level_torque = np.asarray(level_torque, dtype=float)
     mid0 = 0.5 * (_interp_rows(td, pd, 0.0) + _interp_rows(tu, pu, 0.0))
@@ -85,7 +132,26 @@ def lost_motion_centre_line(torque, twist, levels, n, level_torque):
 
 
 def stiffness_fit(torque, twist, levels, n, T1, T2, rated_torque):
-    """(K1, K2, K3 [N·m/rad], torsion at T_N [rad]) from the loading branch to −A."""
+    """Three-segment stiffness fitted to the loading branch to −A.
+
+    Parameters
+    ----------
+    torque, twist : numpy.ndarray, shape (M, nt)
+        Output torque [N·m] and twist [rad], ``n`` samples per ramp.
+    levels : numpy.ndarray
+        The cycle's torque levels (fractions of T_N).
+    n : int
+        Samples per ramp.
+    T1, T2 : float or numpy.ndarray
+        Breakpoints of the law [N·m], per sample.
+    rated_torque : float or numpy.ndarray
+        T_N [N·m], per sample.
+
+    Returns
+    -------
+    numpy.ndarray, shape (4, M)
+        K1, K2, K3 [N·m/rad] and the torsion at T_N [rad].
+    """
     (td, pd), _ = _branches(torque, twist, levels, n)
     M = torque.shape[0]
     T1, T2, TN = (np.broadcast_to(v, (M,)) for v in (T1, T2, rated_torque))
@@ -99,7 +165,28 @@ def stiffness_fit(torque, twist, levels, n, T1, T2, rated_torque):
 
 
 def locked_metrics(names, torque, twist, levels, n, T1, T2, rated_torque) -> dict:
-    """The requested metric groups, SI values converted to the contract's units."""
+    """The requested metric groups of a locked-WG run, in the units their names carry.
+
+    Parameters
+    ----------
+    names : list of str
+        Metric groups (`METRIC_GROUPS`).
+    torque, twist : numpy.ndarray, shape (M, nt)
+        Output torque [N·m] and twist [rad], sampled ``n`` per ramp.
+    levels : numpy.ndarray
+        The cycle's torque levels (fractions of T_N).
+    n : int
+        Samples per ramp.
+    T1, T2 : float or numpy.ndarray
+        Breakpoints of the three-segment fit [N·m] (``stiffness`` only).
+    rated_torque : float or numpy.ndarray
+        T_N [N·m].
+
+    Returns
+    -------
+    dict
+        ``{name: array of shape (M,)}``: arcmin for angles, N·m/rad for stiffnesses.
+    """
     out: dict[str, np.ndarray] = {}
     amplitude = float(np.max(levels))
     for name in names:

@@ -1,23 +1,41 @@
-"""Run a scenario on a model: build the bench system, integrate, compute metrics."""
+"""Run a scenario on a model, and keep the finished run: `Run`, `run_scenario`, `read_run`.
+
+`run_scenario` finds the scenario's bench in `hdsim.scenarios.registry`, checks the
+metric groups it asks for, and calls the bench's runner; `Run.save` and `read_run`
+write and read the run file (`hdsim.scenarios.results`).
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from hdsim import __version__
-from hdsim.simulation.path import locked_wave_generator
-from hdsim.errors import InputError, unknown_name
-from hdsim.scenarios.locked_metrics import METRIC_GROUPS, locked_metrics
+from hdsim.errors import unknown_name
 from hdsim.model.drive import HarmonicDrive
-from hdsim.scenarios.scenario import Scenario
-from hdsim.simulation.solver import SimulationResult, SolverOptions, integrate
+from hdsim.scenarios.registry import get_setup
+from hdsim.scenarios.results import read_run_file, write_run_file
+from hdsim.scenarios.scenario import Scenario, load_scenario
+from hdsim.simulation.solver import SimulationResult, SolverOptions
 
 
 @dataclass
 class Run:
-    """A finished scenario: the time series, the metrics and what produced them."""
+    """A finished scenario: the time series, the metrics and what produced them.
+
+    Attributes
+    ----------
+    model : HarmonicDrive
+        The model (single or batch of M).
+    scenario : Scenario
+        The scenario as run.
+    result : SimulationResult
+        Times [s], states and signals of shape (M, nt), solver statistics, metadata.
+    metrics : dict
+        ``{name: array of shape (M,)}`` in the units their names carry.
+    """
 
     model: HarmonicDrive
     scenario: Scenario
@@ -28,56 +46,92 @@ class Run:
         """One metric of one sample of the batch, as a float (units in its name)."""
         return float(np.asarray(self.metrics[name]).reshape(-1)[sample])
 
+    def save(self, path) -> Path:
+        """Write this run to an HDF5 run file, atomically.
 
-def breakpoints(model: HarmonicDrive):
-    """(T1, T2) of the unit: catalog values if known, else the hardening law's."""
-    catalog = model.provenance.get("catalog")
-    if catalog:
-        return catalog["T1"], catalog["T2"]
-    hardening = model.hardening
-    if hasattr(hardening, "T1"):
-        return hardening.T1, hardening.T2
-    raise InputError("stiffness metrics need breakpoints T1, T2: use a catalog unit or "
-                     "a three_segment hardening effect")
+        Parameters
+        ----------
+        path : str or os.PathLike
+            Target file (layout in `hdsim.scenarios.results`); replaced if it exists.
+
+        Returns
+        -------
+        pathlib.Path
+            The written file; `read_run` reads it back.
+        """
+        return write_run_file(path, self)
+
+
+def read_run(path) -> Run:
+    """Read a run file written by `Run.save`.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The run file.
+
+    Returns
+    -------
+    Run
+        The model (the built-in unit of the stored name with the stored parameters and
+        effects), the scenario, the result and the metrics, as saved.
+
+    Raises
+    ------
+    InputError
+        If the file is not a readable run file.
+    """
+    return Run(*read_run_file(path))
 
 
 def solver_options(scenario: Scenario, base: SolverOptions | None = None) -> SolverOptions:
-    """Solver options with the scenario's ``[solver]`` table applied."""
+    """Solver options with the scenario's ``[solver]`` table applied.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The scenario; its ``[solver]`` table may set ``method``, ``rtol``, ``atol_scale``
+        and ``max_step`` [s].
+    base : SolverOptions, optional
+        Options to start from (default `SolverOptions`).
+    """
     options = base or SolverOptions()
     solver = scenario.data.get("solver", {})
     return options.replace(**solver) if solver else options
 
 
-def run_scenario(model: HarmonicDrive, scenario: Scenario, *, samples_per_segment: int | None = None,
+def run_scenario(model: HarmonicDrive, scenario, *, samples_per_segment: int | None = None,
                  options: SolverOptions | None = None) -> Run:
-    """Simulate ``scenario`` on ``model`` (single or batch) and compute its metrics."""
-    runner = RUNNERS[scenario.setup]
-    run = runner(model, scenario, samples_per_segment=samples_per_segment, options=options)
-    run.result.metadata.update(unit=model.name, scenario=scenario.name, hdsim_version=__version__)
-    return run
+    """Simulate a scenario on a model (single or batch) and compute its metrics.
 
+    Parameters
+    ----------
+    model : HarmonicDrive
+        A single model or a batch of M.
+    scenario : Scenario, str or os.PathLike
+        A scenario, a scenario file or the name of a built-in scenario (`load_scenario`).
+    samples_per_segment : int, optional
+        Output sampling override: samples per ramp (locked bench) or per WG revolution
+        (driven bench).
+    options : SolverOptions, optional
+        Solver options; the scenario's ``[solver]`` table is applied on top.
 
-def _run_locked(model: HarmonicDrive, scenario: Scenario, *, samples_per_segment: int | None = None,
-                options: SolverOptions | None = None) -> Run:
+    Returns
+    -------
+    Run
+        The run; ``result.metadata`` holds ``unit``, ``scenario`` and ``hdsim_version``.
+
+    Raises
+    ------
+    InputError
+        On a bad scenario or a metric group its bench does not report.
+    """
+    scenario = load_scenario(scenario)
+    setup = get_setup(scenario.setup)
     for name in scenario.metrics:
-        if name not in METRIC_GROUPS:
-            raise unknown_name(f"metric in scenario {scenario.name}", name, METRIC_GROUPS)
-    n = samples_per_segment or scenario.samples_per_segment
-    rated = model.drive.rated_torque
-    system = locked_wave_generator(model, scenario.torque_profile(rated))
-    t_eval = scenario.sample_times(n)
-    result = integrate(system, (t_eval[0], t_eval[-1]), t_eval, solver_options(scenario, options))
-    T1, T2 = breakpoints(model) if "stiffness" in scenario.metrics else (np.nan, np.nan)
-    metrics = locked_metrics(scenario.metrics, result.signals["torque_Nm"], result.signals["twist_rad"],
-                             scenario.levels(), n, T1, T2, rated)
+        if name not in setup.metrics:
+            raise unknown_name(f"metric in scenario {scenario.name}", name, setup.metrics)
+    scenario, result, metrics = setup.runner(model, scenario, samples_per_segment=samples_per_segment,
+                                             options=solver_options(scenario, options))
+    result.metadata.update(unit=model.name, scenario=scenario.name, hdsim_version=__version__)
     return Run(model, scenario, result, metrics)
-
-
-def _run_driven(model, scenario, **kw) -> Run:
-    from hdsim.simulation.driven import run_driven  # imported on use: hdsim.simulation.driven imports this module
-
-    return run_driven(model, scenario, **kw)
-
-
-#: one runner per bench set-up (hdsim.scenarios.scenario.SETUP_SCHEMAS lists their tables)
-RUNNERS = {"locked_wave_generator": _run_locked, "driven_wave_generator": _run_driven}

@@ -15,7 +15,10 @@ A locked-wave-generator scenario (stiffness and lost-motion tests) is::
     [output]
     samples_per_segment = 100
 
-Any value can be overridden with ``--set scenario.load.rate=0.1``.
+Any value can be overridden with ``--set scenario.load.rate=0.1``. The tables each
+bench adds, and the keys it requires, come from its `hdsim.scenarios.setups.Setup`
+(`hdsim.scenarios.registry`). A scenario is named by a file path or by the name of a
+built-in scenario file (``lost_motion``, ``stiffness``, …, `builtin_scenario_names`).
 """
 
 from __future__ import annotations
@@ -28,9 +31,9 @@ from pathlib import Path
 
 import numpy as np
 
-from hdsim.scenarios.driven_schema import DRIVEN_REQUIRED, DRIVEN_SCHEMA
 from hdsim.errors import InputError, unknown_name
-from hdsim.scenarios.profiles import cosine_ramps, segment_times
+from hdsim.scenarios.registry import SETUPS, get_setup
+from hdsim.simulation.profiles import cosine_ramps, segment_times
 
 _COMMON = {
     "name": str, "description": str, "setup": str, "metrics": list,
@@ -38,21 +41,11 @@ _COMMON = {
     "solver": {"method": str, "rtol": float, "atol_scale": float, "max_step": float},
 }
 
-#: tables each bench set-up adds to the common schema; required keys are listed in
-#: ``_REQUIRED`` (a new set-up registers both here and a runner in hdsim.scenarios.run)
-SETUP_SCHEMAS = {
-    "locked_wave_generator": {"load": {"amplitude": float, "cycles": int, "rate": float}},
-    "driven_wave_generator": DRIVEN_SCHEMA,
-}
-_REQUIRED = {
-    "locked_wave_generator": {"load": ("amplitude", "cycles", "rate")},
-    "driven_wave_generator": DRIVEN_REQUIRED,
-}
-SETUPS = tuple(SETUP_SCHEMAS)
 
 
 def schema_for(setup: str) -> dict:
-    return {**_COMMON, **SETUP_SCHEMAS.get(setup, {})}
+    """The full schema of a scenario of set-up ``setup``: the common tables and the bench's own."""
+    return {**_COMMON, **(SETUPS[setup].schema if setup in SETUPS else {})}
 
 
 @dataclass(frozen=True)
@@ -67,34 +60,33 @@ class Scenario:
         object.__setattr__(self, "data", copy.deepcopy(self.data))
         if not isinstance(self.data.get("name"), str):
             raise InputError(f"{self.source}: missing 'name'")
-        if self.setup not in SETUP_SCHEMAS:
-            raise unknown_name(f"setup in {self.source}", self.setup, SETUPS)
+        setup = get_setup(self.setup, f"setup in {self.source}")
         _validate(self.data, schema_for(self.setup), self.source, "")
-        for table, keys in _REQUIRED[self.setup].items():
+        for table, keys in setup.required.items():
             for key in keys:
                 if key not in self.data.get(table, {}):
                     raise InputError(f"{self.source}: missing {table}.{key}")
-        if self.setup == "locked_wave_generator":
-            load = self.data["load"]
-            if not 0.0 < load["amplitude"] <= 5.0:
-                raise InputError(f"{self.source}: load.amplitude must be in (0, 5] (fraction of T_N)")
-            if load["cycles"] < 1 or load["rate"] <= 0:
-                raise InputError(f"{self.source}: load.cycles must be >= 1 and load.rate > 0")
+        if setup.check is not None:
+            setup.check(self.data, self.source)
 
     @property
     def name(self) -> str:
+        """The scenario's name (the stem of its result files)."""
         return self.data["name"]
 
     @property
     def setup(self) -> str:
+        """The bench set-up (default ``locked_wave_generator``)."""
         return self.data.get("setup", "locked_wave_generator")
 
     @property
     def metrics(self) -> list[str]:
+        """The metric groups asked for."""
         return list(self.data.get("metrics", []))
 
     @property
     def samples_per_segment(self) -> int:
+        """Output samples per ramp of a locked-WG cycle (default 100)."""
         return int(self.data.get("output", {}).get("samples_per_segment", 100))
 
     def levels(self) -> np.ndarray:
@@ -104,6 +96,7 @@ class Scenario:
         return np.array([0.0] + [amplitude, -amplitude] * load["cycles"] + [0.0])
 
     def times(self) -> np.ndarray:
+        """Waypoint times [s] of the torque cycle (`levels` at the mean ``load.rate``)."""
         return segment_times(self.levels(), self.data["load"]["rate"])
 
     def torque_profile(self, rated_torque):
@@ -177,7 +170,20 @@ def _validate(table, schema, source, prefix):
 
 
 def read_toml(path, kind: str = "TOML") -> dict:
-    """A TOML file as a dict; one-line `InputError` naming the file on any problem."""
+    """Read a TOML file into a dict.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    kind : str
+        What the file is, for the messages (``"scenario"``).
+
+    Raises
+    ------
+    InputError
+        One line naming the file on any problem (missing, a folder, not TOML).
+    """
     path = Path(path)
     try:
         return tomllib.loads(path.read_text())
@@ -189,8 +195,38 @@ def read_toml(path, kind: str = "TOML") -> dict:
         raise InputError(f"{path}: not valid TOML: {exc}") from None
 
 
-def load_scenario(path) -> Scenario:
-    """Read and validate a scenario TOML file; one-line `InputError` on any problem."""
+def load_scenario(scenario) -> Scenario:
+    """A validated scenario from a file, a built-in name or a `Scenario`.
+
+    Parameters
+    ----------
+    scenario : str, os.PathLike or Scenario
+        A scenario TOML file; or, where no such file exists, the name of a built-in
+        scenario (``"lost_motion"``, see `builtin_scenario_names`), found from any
+        working directory; a `Scenario` is returned as it is.
+
+    Returns
+    -------
+    Scenario
+        Its ``source`` is the file read.
+
+    Raises
+    ------
+    InputError
+        One line on any problem: a file that is neither found nor a built-in name (the
+        message lists the built-in scenarios), invalid TOML, an unknown key or set-up,
+        a value of the wrong type or out of range.
+    """
+    if isinstance(scenario, Scenario):
+        return scenario
+    path = Path(scenario)
+    if not path.is_file():
+        names = builtin_scenario_names()
+        if str(scenario) in names:
+            path = builtin_scenario_path(str(scenario))
+        elif not path.exists():
+            raise InputError(f"{path}: scenario file not found, nor a built-in scenario "
+                             f"({', '.join(names)})")
     return Scenario(read_toml(path, "scenario"), str(path))
 
 

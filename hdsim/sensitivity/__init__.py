@@ -1,11 +1,13 @@
 """Generic Sobol' sensitivity analysis for any picklable model ``f(X) -> y``.
 
-Modules: `.problem` (inputs), `.design` (sampling and structure checks),
-`.evaluate` (local/any-executor evaluation by row index), `.store`
-(resumable HDF5 studies), `.analysis` (indices, both interval kinds,
-convergence), `.checks` (consistency safeguards), `.functions`
-(closed forms with analytic indices), `.plots` (figures), `.study`
-(the whole study).
+Modules: `hdsim.sensitivity.problem` (inputs), `hdsim.sensitivity.design` (sampling
+and structure checks), `hdsim.sensitivity.evaluate` (local or any-executor
+evaluation by row index), `hdsim.sensitivity.store` (resumable HDF5 studies),
+`hdsim.sensitivity.analysis` (indices, both interval kinds, convergence),
+`hdsim.sensitivity.checks` (consistency safeguards), `hdsim.sensitivity.functions`
+(closed forms with analytic indices), `hdsim.sensitivity.study` (the whole study).
+The figures are in `hdsim.plotting.sensitivity`; the method is described in
+docs/sensitivity.md.
 """
 
 from hdsim.sensitivity.analysis import analyse, convergence, estimates

@@ -30,10 +30,24 @@ _EPS = np.finfo(float).eps
 
 
 def estimates(blocks: np.ndarray, num_vars: int, second_order: bool) -> dict:
-    """S1 (Saltelli 2010), ST (Jansen) and S2 (Saltelli 2002) from blocks ``(nb, k)``.
+    """S1 (Saltelli 2010), ST (Jansen) and S2 (Saltelli 2002) from complete blocks.
 
     Same arithmetic as SALib 1.6 (output standardised first, variance of A ∪ B), so
     on the same rows it reproduces SALib's point estimates exactly.
+
+    Parameters
+    ----------
+    blocks : numpy.ndarray
+        Outputs ``(nb, k)``, one row per base point in the A, AB, [BA,] B layout.
+    num_vars : int
+        Number of inputs D.
+    second_order : bool
+        Whether the blocks hold BA rows (then S2 is estimated).
+
+    Returns
+    -------
+    dict
+        ``S1``, ``ST`` (D,) [-] and ``S2`` (D, D), upper triangle, or None [-].
     """
     D = num_vars
     Y = np.asarray(blocks, dtype=float)
@@ -60,18 +74,39 @@ def analyse(problem, X, Y, *, second_order: bool, replicates: int, key=None, eva
     Parameters
     ----------
     problem : Problem
-    X, Y : ndarray
-        Design ``(R * M, D)`` and outputs ``(R * M,)`` in replicate-major row order.
+        The study inputs.
+    X : numpy.ndarray
+        Design ``(R * M, D)`` in replicate-major row order.
+    Y : numpy.ndarray
+        Outputs ``(R * M,)``, row for row with ``X``.
+    second_order : bool
+        Whether the design holds BA rows.
+    replicates : int
+        Independently scrambled replicates R.
     key : ndarray of uint64, optional
         Fingerprints returned with the outputs; compared with ``X`` row by row.
     evaluated : ndarray of bool, optional
         Rows that have been evaluated (those whose key is checked).
+    conf_level : float
+        Confidence level of both interval kinds [-].
+    num_resamples : int
+        Bootstrap resamples of the SALib interval.
+    seed : int
+        Seed of the bootstrap.
 
     Returns
     -------
-    dict with arrays ``S1, S1_conf, ST, ST_conf, S1_conf_replicates,
-    ST_conf_replicates`` (and ``S2*`` with second order), ``replicates`` (per-replicate
-    S1/ST), ``blocks_used``, ``blocks_dropped``.
+    dict
+        Arrays ``S1, S1_conf, ST, ST_conf, S1_conf_replicates, ST_conf_replicates``
+        (and ``S2*`` with second order) [-], ``replicates`` (per-replicate S1/ST),
+        ``blocks_used``, ``blocks_dropped``.
+
+    Raises
+    ------
+    DesignError
+        On a design without the Saltelli structure or an output filed under another row.
+    InputError
+        On mismatched sizes or too few successful blocks.
     """
     X, Y = np.asarray(X, dtype=float), np.asarray(Y, dtype=float)
     evaluated = np.isfinite(Y) if evaluated is None else np.asarray(evaluated, bool)
@@ -82,8 +117,31 @@ def analyse(problem, X, Y, *, second_order: bool, replicates: int, key=None, eva
 
 
 def check_outputs(problem, X, Y, second_order, key=None, evaluated=None) -> None:
-    """The design check: block structure of ``X``, and (with ``key``) that every
-    evaluated output was computed from its own row. Raises `DesignError`."""
+    """The design check: block structure of ``X`` and the pairing of outputs with rows.
+
+    Parameters
+    ----------
+    problem : Problem
+        The study inputs.
+    X : numpy.ndarray
+        Design rows.
+    Y : numpy.ndarray
+        Outputs, row for row with ``X``.
+    second_order : bool
+        Whether the design holds BA rows.
+    key : numpy.ndarray of uint64, optional
+        Fingerprints returned with the outputs; with them every evaluated output must
+        have been computed from its own row.
+    evaluated : numpy.ndarray of bool, optional
+        Rows whose key is checked; default: those with a finite output.
+
+    Raises
+    ------
+    DesignError
+        On a broken structure or a misfiled output.
+    InputError
+        When ``Y`` and ``X`` differ in length.
+    """
     check_design(X, problem.num_vars, second_order)
     if len(Y) != len(X):
         raise InputError(f"{len(Y)} outputs for {len(X)} design rows")
@@ -95,7 +153,35 @@ def indices(problem, Y, ok, *, second_order: bool, replicates: int, conf_level=0
             num_resamples=100, seed=0) -> dict:
     """Indices from outputs already checked against their design (see `analyse`).
 
-    ``ok`` marks good rows; a block with any bad row is dropped whole.
+    Parameters
+    ----------
+    problem : Problem
+        The study inputs.
+    Y : numpy.ndarray
+        Outputs in replicate-major row order.
+    ok : numpy.ndarray of bool
+        Good rows; a block with any bad row is dropped whole.
+    second_order : bool
+        Whether the design holds BA rows.
+    replicates : int
+        Independently scrambled replicates R.
+    conf_level : float
+        Confidence level of both interval kinds [-].
+    num_resamples : int
+        Bootstrap resamples of the SALib interval.
+    seed : int
+        Seed of the bootstrap.
+
+    Returns
+    -------
+    dict
+        As `analyse` returns.
+
+    Raises
+    ------
+    InputError
+        When ``Y`` does not split into replicates of whole blocks, or a replicate has
+        fewer than two good blocks.
     """
     D, k, R = problem.num_vars, block_size(problem.num_vars, second_order), int(replicates)
     Y = np.asarray(Y, dtype=float)
@@ -121,7 +207,20 @@ def indices(problem, Y, ok, *, second_order: bool, replicates: int, conf_level=0
 
 
 def t_halfwidth(samples: np.ndarray, conf_level: float = 0.95) -> np.ndarray:
-    """Half-width of the Student-t interval for the mean of ``samples`` (axis 0)."""
+    """Half-width of the Student-t interval for the mean of ``samples`` (axis 0).
+
+    Parameters
+    ----------
+    samples : numpy.ndarray
+        One estimate per replicate along axis 0.
+    conf_level : float
+        Confidence level [-].
+
+    Returns
+    -------
+    numpy.ndarray
+        Half-width, in the unit of ``samples``.
+    """
     R = len(samples)
     t = stats.t.ppf(0.5 + conf_level / 2, R - 1)
     return t * np.std(samples, axis=0, ddof=1) / np.sqrt(R)
@@ -142,6 +241,26 @@ def salib_indices(problem, Y, second_order, conf_level, num_resamples, seed) -> 
     ``B`` resamples in batches so memory does not grow with N × B. With
     ``N * B <= BOOT_ELEMENTS`` it is one batch and reproduces ``analyze`` exactly
     (tested); larger studies use a derived seed per batch.
+
+    Parameters
+    ----------
+    problem : Problem
+        The study inputs.
+    Y : numpy.ndarray
+        Outputs of complete blocks, pooled.
+    second_order : bool
+        Whether the blocks hold BA rows.
+    conf_level : float
+        Confidence level [-].
+    num_resamples : int
+        Bootstrap resamples B.
+    seed : int
+        Study seed (the bootstrap seed is derived from it).
+
+    Returns
+    -------
+    dict
+        ``S1``, ``ST``, ``S1_conf``, ``ST_conf`` (and ``S2``, ``S2_conf``) [-].
     """
     from SALib.analyze import sobol
 
@@ -209,6 +328,34 @@ def convergence(problem, Y, *, second_order: bool, replicates: int, evaluated=No
     The design is extensible, so the first ``n / R`` base points of every replicate
     *are* the study at ``n``: no extra evaluations. Only S1/ST are tracked (the BA
     rows of a second-order design are skipped).
+
+    Parameters
+    ----------
+    problem : Problem
+        The study inputs.
+    Y : numpy.ndarray
+        Outputs of the full study in replicate-major row order.
+    second_order : bool
+        Whether the design holds BA rows.
+    replicates : int
+        Independently scrambled replicates R.
+    evaluated : numpy.ndarray of bool, optional
+        Rows that have been evaluated; default: those with a finite output.
+    conf_level : float
+        Confidence level of both interval kinds [-].
+    num_resamples : int
+        Bootstrap resamples of the SALib interval.
+    seed : int
+        Seed of the bootstrap.
+    n_min : int, optional
+        Smallest N; default and floor ``4 R``.
+
+    Returns
+    -------
+    list of dict
+        One row per N with ``n``, ``S1``, ``ST``, ``S1_conf``, ``ST_conf``,
+        ``S1_conf_replicates`` and ``ST_conf_replicates`` [-]; an N at which a
+        replicate has fewer than two good blocks is left out.
     """
     D, R = problem.num_vars, int(replicates)
     k = block_size(D, second_order)

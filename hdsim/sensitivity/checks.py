@@ -1,4 +1,4 @@
-"""Consistency safeguards on a set of Sobol' indices (reference §5).
+"""Consistency safeguards on a set of Sobol' indices (docs/sensitivity.md, section 6).
 
 Generic truths for independent inputs, each tested with a tolerance that adds the
 estimate's own replicate half-widths (in quadrature) to a fixed ``tol``:
@@ -20,8 +20,25 @@ import numpy as np
 
 
 def consistency_checks(S1, ST, S1_half=None, ST_half=None, names=None, tol=0.02) -> dict:
-    """Run the safeguards; return ``{"ok", "tol", "sum_S1", "sum_ST", "interaction_share",
-    "items": [...], "flags": [...]}`` (JSON-ready)."""
+    """Run the safeguards on one set of indices.
+
+    Parameters
+    ----------
+    S1, ST : array_like
+        First-order and total indices, one per input [-].
+    S1_half, ST_half : array_like, optional
+        Their replicate half-widths [-]; zero when omitted.
+    names : list of str, optional
+        Input names for the messages; ``x1, x2, ...`` when omitted.
+    tol : float
+        Fixed part of every tolerance [-].
+
+    Returns
+    -------
+    dict
+        JSON-ready: ``ok``, ``tol``, ``sum_S1``, ``sum_ST``, ``interaction_share``,
+        ``items`` (one ``{check, value, limit, ok}`` per check) and ``flags`` (text).
+    """
     S1, ST = np.asarray(S1, float), np.asarray(ST, float)
     h1 = np.zeros_like(S1) if S1_half is None else np.asarray(S1_half, float)
     hT = np.zeros_like(ST) if ST_half is None else np.asarray(ST_half, float)
@@ -60,7 +77,18 @@ def _item(check, value, limit, ok) -> dict:
 
 
 def failed_messages(checks: dict) -> list[str]:
-    """One line per failed check or flag (for stderr)."""
+    """One line per failed check or flag, for stderr.
+
+    Parameters
+    ----------
+    checks : dict
+        What `consistency_checks` returned.
+
+    Returns
+    -------
+    list of str
+        ``check failed: ...`` lines, then ``warning: ...`` lines.
+    """
     lines = [f"check failed: {it['check']} (value {it['value']:.4g}, limit {it['limit']:.4g})"
              for it in checks["items"] if not it["ok"]]
     return lines + [f"warning: {flag}" for flag in checks["flags"]]

@@ -36,7 +36,25 @@ def is_power_of_two(n: int) -> bool:
 
 
 def check_sizes(n: int, replicates: int) -> int:
-    """Validate ``N`` and ``R``; return the base points per replicate ``N / R``."""
+    """Validate the base points N and the replicates R of a study.
+
+    Parameters
+    ----------
+    n : int
+        Base points N; a power of 2, at least 4 per replicate.
+    replicates : int
+        Replicates R; a power of 2, at least 2.
+
+    Returns
+    -------
+    int
+        Base points per replicate, ``N / R``.
+
+    Raises
+    ------
+    InputError
+        On an N or R that breaks these rules, with the nearest valid N.
+    """
     if not is_power_of_two(n):
         raise InputError(f"--n must be a power of 2 (Sobol' balance), got {n}; "
                          f"nearest: {_nearest_pow2(n)}")
@@ -75,6 +93,24 @@ def sample_replicate(problem, n_base: int, seed: int, second_order: bool,
     A slice (``start > 0``) uses SALib's ``skip_values``, which fast-forwards the same
     scrambled sequence; the store builds big designs piece by piece this way, so
     memory does not grow with N (tests check pieces == whole).
+
+    Parameters
+    ----------
+    problem : Problem
+        The study inputs.
+    n_base : int
+        Base points to generate.
+    seed : int
+        Scramble seed of the replicate (`replicate_seed`).
+    second_order : bool
+        Add the BA rows that second-order indices need.
+    start : int
+        First base point.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n_base * k, D)`` rows in the inputs' own units, ``k`` from `block_size`.
     """
     from SALib.sample import sobol
 
@@ -113,6 +149,20 @@ def check_design(X: np.ndarray, num_vars: int, second_order: bool) -> None:
 
     AB_i must equal A in every column except i and equal B in column i; BA_i the
     reverse. Scaling is column-wise and deterministic, so exact equality holds.
+
+    Parameters
+    ----------
+    X : numpy.ndarray
+        Design ``(n * k, D)``.
+    num_vars : int
+        Number of inputs D.
+    second_order : bool
+        Whether the blocks hold BA rows.
+
+    Raises
+    ------
+    DesignError
+        On a wrong shape or the first row that breaks the structure.
     """
     D, k = num_vars, block_size(num_vars, second_order)
     X = np.asarray(X)
@@ -139,7 +189,22 @@ def _compare(got, expect, k, offset, label):
 
 
 def check_keys(X: np.ndarray, keys: np.ndarray, done: np.ndarray) -> None:
-    """Raise `DesignError` if an output was computed for other inputs than its row."""
+    """Raise `DesignError` if an output was computed for other inputs than its row.
+
+    Parameters
+    ----------
+    X : numpy.ndarray
+        Design rows.
+    keys : numpy.ndarray of uint64
+        Fingerprints returned with the outputs (`fingerprint` of what each worker saw).
+    done : numpy.ndarray of bool
+        Rows whose output is on record (only those are compared).
+
+    Raises
+    ------
+    DesignError
+        Naming how many outputs are misfiled and the first row.
+    """
     done = np.asarray(done, dtype=bool)
     mismatch = done & (fingerprint(X) != np.asarray(keys, dtype=np.uint64))
     if mismatch.any():

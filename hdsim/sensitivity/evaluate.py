@@ -39,7 +39,18 @@ class Evaluation:
 def run_chunk(func, x):
     """Worker side: evaluate one chunk; isolate failing rows if the chunk call raises.
 
-    Returns ``(y, key, errors, evaluations)`` with ``errors`` mapping local row -> text.
+    Parameters
+    ----------
+    func : callable
+        The model ``f(X: (n, d)) -> (n,)``.
+    x : array_like
+        The chunk's rows ``(n, d)``.
+
+    Returns
+    -------
+    tuple
+        ``(y, key, errors, evaluations)``: outputs (NaN where failed), input
+        fingerprints, local row -> error text, and model row evaluations performed.
     """
     x = np.ascontiguousarray(x, dtype=np.float64)
     key, errors, n = fingerprint(x), {}, len(x)
@@ -88,6 +99,24 @@ def open_executor(spec: str | None = "local", workers: int = 2):
     The Dask client is imported lazily (``dask[distributed]`` is optional) and
     closed on exit; ``get_executor(pure=False)`` because identical rows must still
     run (dask would otherwise deduplicate calls it deems pure).
+
+    Parameters
+    ----------
+    spec : str, optional
+        ``'local'`` (default) or ``'dask://HOST:PORT'``.
+    workers : int
+        Processes of the local pool; 1 evaluates in-process.
+
+    Yields
+    ------
+    concurrent.futures.Executor or None
+        The executor; None for in-process evaluation.
+
+    Raises
+    ------
+    InputError
+        On a bad spec or worker count, a missing ``distributed`` package or an
+        unreachable scheduler.
     """
     spec = (spec or "local").strip()
     if workers < 1:
@@ -134,13 +163,31 @@ def evaluate(func, X, executor=None, *, workers=2, chunksize=None, rows=None,
         Anything with ``submit(fn, *args) -> Future`` (process/thread pools, Dask's
         ``Client.get_executor()``, MPIPoolExecutor). None: a local process pool of
         ``workers`` processes, or in-process serial evaluation when ``workers == 1``.
+    workers : int
+        Processes of the local pool.
     chunksize : int, optional
-        Rows per task; default `default_chunksize`.
+        Rows per task; default ``func.chunksize`` if it has one, else
+        `default_chunksize`.
     rows : ndarray, optional
         Labels of the rows (e.g. global indices in a study) handed to ``on_chunk``.
     on_chunk : callable, optional
         ``on_chunk(labels, y, key, errors)`` in the calling process as each chunk
         finishes (the study store writes and flushes it to disk here).
+    progress : bool
+        Show a progress bar on stderr when it is a terminal.
+    max_in_flight : int, optional
+        Most chunks submitted to ``executor`` at once (default 64), which keeps memory
+        flat for huge designs.
+
+    Returns
+    -------
+    Evaluation
+        Outputs, fingerprints and failures aligned with the rows of ``X``.
+
+    Raises
+    ------
+    ModelError
+        When the model fails on every row of the first few hundred.
     """
     n = len(X)
     rows = np.arange(n) if rows is None else np.asarray(rows)

@@ -46,8 +46,18 @@ class Layout:
         return self.replicates * self.rows_per_replicate, self.problem.num_vars
 
     def pieces(self, piece: int | None = None):
-        """Yield ``(first global row, X)`` covering the design, at most ``piece`` base
-        points at a time, so memory stays flat however large N is."""
+        """Yield the design piece by piece, so memory stays flat however large N is.
+
+        Parameters
+        ----------
+        piece : int, optional
+            Most base points per piece; default `PIECE`.
+
+        Yields
+        ------
+        tuple of (int, numpy.ndarray)
+            First global row of the piece and its design rows.
+        """
         piece = piece or PIECE
         d, k, M = self.definition, self.k, self.rows_per_replicate
         n_r = self.n // self.replicates
@@ -75,7 +85,20 @@ class Layout:
 
 
 def runs(rows, offsets: bool = False) -> list[tuple]:
-    """Split sorted row indices into contiguous ``(start, stop[, offset])`` runs."""
+    """Split sorted row indices into contiguous runs.
+
+    Parameters
+    ----------
+    rows : array_like of int
+        Sorted row indices.
+    offsets : bool
+        Also give each run's position in ``rows``.
+
+    Returns
+    -------
+    list of tuple
+        ``(start, stop)`` or, with ``offsets``, ``(start, stop, offset)`` per run.
+    """
     rows = np.asarray(rows, dtype=np.int64)
     if not len(rows):
         return []

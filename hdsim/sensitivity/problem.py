@@ -76,7 +76,20 @@ class Problem:
 
 
 def uniform(names, bounds) -> Problem:
-    """A problem with every input uniform on its ``(lo, hi)``."""
+    """A problem with every input uniform on its ``(lo, hi)``.
+
+    Parameters
+    ----------
+    names : sequence of str
+        Input names.
+    bounds : sequence of (float, float)
+        Lower and upper bound of each input [its unit].
+
+    Returns
+    -------
+    Problem
+        The problem.
+    """
     return Problem(tuple(names), tuple((float(lo), float(hi)) for lo, hi in bounds),
                    ("unif",) * len(names))
 
@@ -96,7 +109,25 @@ def _check_one(name, lo, hi, dist):
 
 
 def input_variance(dist: str, a: float, b: float) -> float:
-    """Variance of one input; ``(a, b)`` are bounds, or mean and sd for ``norm``."""
+    """Variance of one input under its distribution.
+
+    Parameters
+    ----------
+    dist : str
+        ``'unif'``, ``'logunif'`` or ``'norm'``.
+    a, b : float
+        Bounds, or mean and standard deviation for ``norm`` [unit of the input].
+
+    Returns
+    -------
+    float
+        Variance [unit of the input squared].
+
+    Raises
+    ------
+    InputError
+        On an unknown distribution.
+    """
     if dist == "unif":
         return (b - a) ** 2 / 12.0
     if dist == "norm":
@@ -154,6 +185,17 @@ def build_problem(names, nominal=None, range_frac=None, bounds=None, dists=None)
         Name -> ``'LO:HI'`` text; overrides the range for that parameter.
     dists : dict, optional
         Name -> ``'unif'``, ``'logunif'``, ``'norm'`` or ``'norm:MEAN:SD'``.
+
+    Returns
+    -------
+    Problem
+        Bounds in the parameters' SI units.
+
+    Raises
+    ------
+    InputError
+        On an option naming an unknown parameter, an unknown distribution, unreadable
+        bounds, or a parameter with neither bounds nor a usable nominal and range.
     """
     names = list(names)
     nominal, bounds, dists = dict(nominal or {}), dict(bounds or {}), dict(dists or {})

@@ -28,13 +28,30 @@ def resolved_indices(func, problem, n: int, *, seed: int = 0, replicates: int = 
     func : callable
         ``f(X: (rows, D)) -> (rows, T)``, the output on a grid of ``T`` points.
     problem : Problem
+        The study inputs.
     n : int
         Base points N (power of 2), split into ``replicates`` scrambles.
+    seed : int
+        Study seed; each replicate's scramble seed is derived from it.
+    replicates : int
+        Independently scrambled replicates R (power of 2, at least 2).
+    chunksize : int, optional
+        Rows per call of ``func``; default ``func.chunksize`` if it has one, else 1024.
+    conf_level : float
+        Confidence level of the replicate intervals [-].
 
     Returns
     -------
-    dict with ``S1``, ``ST`` (T, D), their ``*_conf_replicates`` half-widths (T, D),
-    and ``variance`` (T,), the output variance at each point [output unit²].
+    dict
+        ``S1``, ``ST`` (T, D) [-], their ``*_conf_replicates`` half-widths (T, D) [-],
+        and ``variance`` (T,), the output variance at each point [output unit²].
+
+    Raises
+    ------
+    InputError
+        On a bad N or R.
+    ValueError
+        When ``func`` returns another number of rows than it was given.
     """
     check_sizes(n, replicates)
     D, k = problem.num_vars, block_size(problem.num_vars, False)

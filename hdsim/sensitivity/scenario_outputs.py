@@ -1,25 +1,32 @@
 """Evaluate a simulator metric for many parameter sets at once (the study interface).
 
-``model_function(unit, names, output)`` returns a picklable callable ``f(X)`` that
-maps a matrix of parameter rows ``(n, d)`` to the metric ``(n,)``: the rows become
-one *batch* model (array-valued parameters) integrated in a single ``solve_ivp``
-call, so the Python and solver overhead is paid once per chunk, not per row.
-Rows whose geometry is impossible, or on which the solver fails, come back NaN;
-the sensitivity layer then drops their block and names them.
+``model_function(drive, names, output, scenario)`` returns a picklable callable
+``f(X)`` that maps a matrix of parameter rows ``(n, d)`` to the metric ``(n,)``: the
+rows become one *batch* model (array-valued parameters) integrated in a single
+``solve_ivp`` call, so the Python and solver overhead is paid once per chunk, not per
+row. The drive is any `HarmonicDrive` (a built-in unit, a modified or a fitted one)
+or the name of a built-in unit; the scenario is a built-in name, a scenario file or a
+`Scenario`. Both travel to the workers inside the callable (they pickle). Rows whose
+geometry is impossible, or on which the solver fails, come back NaN; the sensitivity
+layer then drops their block and names them.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import hashlib
+import json
+from dataclasses import dataclass, fields, is_dataclass
 
 import numpy as np
 
-from hdsim.model.catalog import load_unit
 from hdsim.errors import InputError, SolverError, unknown_name
+from hdsim.model.catalog import load_unit
+from hdsim.model.drive import HarmonicDrive
 from hdsim.model.geometry import FlexsplineGeometry
 from hdsim.scenarios.run import run_scenario
-from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario
+from hdsim.scenarios.scenario import Scenario, load_scenario
 from hdsim.simulation.solver import SolverOptions
+from hdsim.typing import ArrayLike
 
 #: which built-in scenario produces each metric
 METRIC_SCENARIOS = {
@@ -37,9 +44,97 @@ STUDY_SOLVER = SolverOptions(rtol=1e-4, atol_scale=1e-4)
 STUDY_SAMPLES = {"lost_motion": 1, "stiffness": 40}
 
 
-def resolve_names(unit: str, names) -> list[str]:
-    """Dotted parameter names; a bare flexspline dimension (``h_pz``) is accepted too."""
-    known = load_unit(unit).params()
+def as_drive(drive) -> HarmonicDrive:
+    """The model to study: a `HarmonicDrive` as it is, a name (or None) through `load_unit`.
+
+    Parameters
+    ----------
+    drive : HarmonicDrive, str or None
+        A model object (built-in, modified with ``with_updates``, fitted) or the name of
+        a built-in unit (None: the default unit).
+
+    Returns
+    -------
+    HarmonicDrive
+
+    Raises
+    ------
+    InputError
+        On an unknown unit name or an object that is not a drive.
+    """
+    if isinstance(drive, HarmonicDrive):
+        return drive
+    if drive is None or isinstance(drive, str):
+        return load_unit(drive)
+    raise InputError(f"expected a HarmonicDrive or a unit name, got {type(drive).__name__}")
+
+
+def drive_fingerprint(drive: HarmonicDrive, scenario: Scenario | None = None) -> str:
+    """A short hash of everything an evaluation depends on: parameters, effects, scenario.
+
+    Two drives have the same fingerprint exactly when their names, effect classes and
+    every field value agree (the ``provenance`` notes are left out); a study file keeps
+    it so that resuming with another drive or scenario is refused.
+
+    Parameters
+    ----------
+    drive : HarmonicDrive
+        The model (single or batch).
+    scenario : Scenario, optional
+        Its table is hashed too.
+
+    Returns
+    -------
+    str
+        16 hexadecimal digits.
+    """
+    state = {"drive": _canonical(drive), "scenario": None if scenario is None else scenario.data}
+    text = json.dumps(state, sort_keys=True, default=repr)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def _canonical(value):
+    """A JSON-able image of a parameter tree (class names included, provenance left out)."""
+    if is_dataclass(value) and not isinstance(value, type):
+        out = {"class": f"{type(value).__module__}.{type(value).__qualname__}"}
+        out.update({f.name: _canonical(getattr(value, f.name))
+                    for f in fields(value) if f.name != "provenance"})
+        return out
+    if isinstance(value, np.ndarray):
+        return [_canonical(v) for v in value.tolist()] if value.ndim else _canonical(value.item())
+    if isinstance(value, (list, tuple)):
+        return [_canonical(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): _canonical(v) for k, v in value.items()}
+    if isinstance(value, (bool, np.bool_, str)) or value is None:
+        return value if not isinstance(value, np.bool_) else bool(value)
+    if isinstance(value, (int, float, np.number)):
+        return repr(float(value))  # 100 and 100.0 alike; repr round-trips every bit
+    return repr(value)
+
+
+def resolve_names(drive, names) -> list[str]:
+    """Dotted parameter names of ``drive``; a bare flexspline dimension (``h_pz``) is accepted too.
+
+    Parameters
+    ----------
+    drive : HarmonicDrive, str or None
+        The model, or a built-in unit name (`as_drive`).
+    names : iterable of str
+        ``"flexspline.h_c"``, ``"friction.slip_torque"``, or ``"h_c"`` for a flexspline
+        dimension.
+
+    Returns
+    -------
+    list of str
+        The dotted names, in the given order.
+
+    Raises
+    ------
+    InputError
+        On a name the drive does not have, with the close matches.
+    """
+    known = as_drive(drive).params()
     design = set(FlexsplineGeometry.design_names())
     resolved = []
     for name in names:
@@ -52,24 +147,47 @@ def resolve_names(unit: str, names) -> list[str]:
     return resolved
 
 
-def nominal_values(unit: str, names) -> dict[str, float]:
-    """Nominal value of each parameter of the built-in ``unit`` (keys as given)."""
-    params = load_unit(unit).params()
-    return {name: float(params[dotted]) for name, dotted in zip(names, resolve_names(unit, names))}
+def nominal_values(drive, names) -> dict[str, float]:
+    """Value of each named parameter in ``drive`` [SI unit of the parameter], keys as given.
+
+    Parameters
+    ----------
+    drive : HarmonicDrive, str or None
+        A single model, or a built-in unit name.
+    names : iterable of str
+        Parameter names (see `resolve_names`).
+    """
+    names = list(names)
+    params = as_drive(drive).params()
+    return {name: float(np.asarray(params[dotted]).reshape(-1)[0])
+            for name, dotted in zip(names, resolve_names(drive, names))}
 
 
 @dataclass(frozen=True)
 class ScenarioMetric:
-    """Picklable ``f(X) -> y``: one metric of one scenario on one unit, rows batched."""
+    """Picklable ``f(X) -> y``: one metric of one scenario on one drive, rows batched.
 
-    unit: str
+    Attributes
+    ----------
+    drive : HarmonicDrive or str
+        The model whose parameters the rows replace (a unit name is loaded in the worker).
+    names : tuple of str
+        Dotted parameter names, one per column of ``X``.
+    output : str
+        The metric, e.g. ``"lost_motion_arcmin"``.
+    scenario : Scenario or str
+        The scenario, or a built-in scenario name or file.
+    chunksize : int
+        Rows per task the study engine should send (larger chunks amortise overhead).
+    """
+
+    drive: HarmonicDrive | str
     names: tuple[str, ...]
     output: str
-    scenario: str
-    #: rows per task the study engine should send (larger chunks amortise overhead)
+    scenario: Scenario | str
     chunksize: int = 1024
 
-    def __call__(self, X) -> np.ndarray:
+    def __call__(self, X: ArrayLike) -> np.ndarray:
         X = np.atleast_2d(np.asarray(X, dtype=float))
         y = np.full(len(X), np.nan)
         valid = self._valid_rows(X)
@@ -78,7 +196,7 @@ class ScenarioMetric:
         return y
 
     def _model(self, X):
-        return load_unit(self.unit).with_updates({n: X[:, j] for j, n in enumerate(self.names)})
+        return as_drive(self.drive).with_updates({n: X[:, j] for j, n in enumerate(self.names)})
 
     def _valid(self, row) -> bool:
         try:
@@ -98,17 +216,20 @@ class ScenarioMetric:
         return np.ones(len(X), dtype=bool)
 
     def _evaluate(self, X) -> np.ndarray:
-        scenario = load_scenario(builtin_scenario_path(self.scenario))
+        scenario = load_scenario(self.scenario)
         try:
             run = run_scenario(self._model(X), scenario, options=STUDY_SOLVER,
-                               samples_per_segment=STUDY_SAMPLES.get(self.scenario))
-            return np.asarray(run.metrics[self.output], dtype=float).reshape(-1)
+                               samples_per_segment=STUDY_SAMPLES.get(scenario.name))
         except SolverError:
             if len(X) == 1:
                 return np.array([np.nan])
             # isolate the failing rows by halving; the others keep their values
             half = len(X) // 2
             return np.concatenate([self._evaluate(X[:half]), self._evaluate(X[half:])])
+        if self.output not in run.metrics:
+            raise unknown_name(f"output metric of scenario {scenario.name}", self.output,
+                               run.metrics)
+        return np.asarray(run.metrics[self.output], dtype=float).reshape(-1)
 
 
 @dataclass(frozen=True)
@@ -119,22 +240,23 @@ class ScenarioSeries:
     ``times()`` gives the grid [s].
     """
 
-    unit: str
+    drive: HarmonicDrive | str
     names: tuple[str, ...]
     signal: str
-    scenario: str
+    scenario: Scenario | str
     samples_per_segment: int = 20
     chunksize: int = 1024
 
-    def _scenario(self):
-        return load_scenario(builtin_scenario_path(self.scenario))
+    def _scenario(self) -> Scenario:
+        return load_scenario(self.scenario)
 
     def times(self) -> np.ndarray:
+        """The output grid [s] of every row of ``f(X)``."""
         return self._scenario().sample_times(self.samples_per_segment)
 
-    def __call__(self, X) -> np.ndarray:
+    def __call__(self, X: ArrayLike) -> np.ndarray:
         X = np.atleast_2d(np.asarray(X, dtype=float))
-        metric = ScenarioMetric(self.unit, self.names, "", self.scenario)
+        metric = ScenarioMetric(self.drive, self.names, "", self.scenario)
         scenario = self._scenario()
         Y = np.full((len(X), scenario.sample_times(self.samples_per_segment).size), np.nan)
         valid = metric._valid_rows(X)
@@ -145,18 +267,75 @@ class ScenarioSeries:
         return Y
 
 
-def series_function(unit: str, names, signal: str, scenario: str) -> ScenarioSeries:
-    """The resolved-study callable for ``signal`` (e.g. ``twist_rad``) of ``scenario``."""
-    builtin_scenario_path(scenario)
-    return ScenarioSeries(unit, tuple(resolve_names(unit, names)), signal, scenario)
+def _single(drive) -> HarmonicDrive:
+    model = as_drive(drive)
+    if model.batch_size != 1:
+        raise InputError(f"a study varies one drive; this one is a batch of {model.batch_size}")
+    return model
 
 
-def model_function(unit: str, names, output: str, scenario: str | None = None) -> ScenarioMetric:
-    """The study callable for ``output`` of ``scenario`` (default: the scenario producing it)."""
+def _check_output(model: HarmonicDrive, scenario: Scenario, output: str) -> None:
+    """Run the nominal drive once: a metric the scenario does not report is refused here,
+    not after every row of the study has failed on it."""
+    run = run_scenario(model, scenario, options=STUDY_SOLVER,
+                       samples_per_segment=STUDY_SAMPLES.get(scenario.name))
+    if output not in run.metrics:
+        raise unknown_name(f"output metric of scenario {scenario.name}", output, run.metrics)
+
+
+def series_function(drive, names, signal: str, scenario) -> ScenarioSeries:
+    """The resolved-study callable for ``signal`` (e.g. ``twist_rad``) of ``scenario``.
+
+    Parameters
+    ----------
+    drive : HarmonicDrive, str or None
+        The model, or a built-in unit name.
+    names : iterable of str
+        Parameters to vary (see `resolve_names`).
+    signal : str
+        A signal of the run, e.g. ``"twist_rad"``.
+    scenario : Scenario, str or os.PathLike
+        A scenario, a built-in scenario name or a scenario file.
+    """
+    model = _single(drive)
+    return ScenarioSeries(drive if isinstance(drive, str) else model,
+                          tuple(resolve_names(model, names)), signal, load_scenario(scenario))
+
+
+def model_function(drive, names, output: str, scenario=None) -> ScenarioMetric:
+    """The study callable for ``output`` of ``scenario`` on ``drive``.
+
+    Parameters
+    ----------
+    drive : HarmonicDrive, str or None
+        Any single model (built-in, modified, fitted), or a built-in unit name.
+    names : iterable of str
+        Parameters to vary, one per column of ``X`` (see `resolve_names`).
+    output : str
+        The metric, e.g. ``"lost_motion_arcmin"``.
+    scenario : Scenario, str or os.PathLike, optional
+        A scenario, a built-in scenario name or a scenario file; default the built-in
+        scenario producing ``output`` (`METRIC_SCENARIOS`).
+
+    Returns
+    -------
+    ScenarioMetric
+        Picklable ``f(X: (n, d)) -> (n,)``; NaN for rows that cannot be built or solved.
+
+    Raises
+    ------
+    InputError
+        On an unknown unit, parameter, output (without a scenario) or scenario, or an
+        unreadable scenario file.
+    """
     if scenario is None:
         if output not in METRIC_SCENARIOS:
             raise unknown_name("output metric", output, METRIC_SCENARIOS)
         scenario = METRIC_SCENARIOS[output]
-    builtin_scenario_path(scenario)  # fails early with a clear message
-    load_unit(unit)
-    return ScenarioMetric(unit, tuple(resolve_names(unit, names)), output, scenario)
+    resolved = load_scenario(scenario)  # fails early with a clear message
+    model = _single(drive)
+    if not (isinstance(scenario, str) and METRIC_SCENARIOS.get(output) == scenario):
+        _check_output(model, resolved, output)
+    # a unit given by name travels by name: workers load it from their own cache
+    return ScenarioMetric(drive if isinstance(drive, str) else model,
+                          tuple(resolve_names(model, names)), output, resolved)

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hdsim.io.atomic import atomic_path
+from hdsim.atomic import atomic_path
 from hdsim.errors import InputError
 from hdsim.sensitivity.layout import PIECE, Layout, runs
 
@@ -159,8 +159,27 @@ class RowReader:
 def open_store(definition: dict, n: int, path=None, resume=False):
     """Create, reopen or extend the study for ``definition`` with ``n`` base points.
 
-    Raises `InputError` if ``path`` exists without ``resume``, or if it holds a
-    study with a different definition.
+    Parameters
+    ----------
+    definition : dict
+        Problem, seed, second order, replicates and model of the study.
+    n : int
+        Base points N.
+    path : str or os.PathLike, optional
+        Study file; None keeps the study in memory.
+    resume : bool
+        Continue an existing file (extended when ``n`` is larger than its N).
+
+    Returns
+    -------
+    MemoryStore or H5Store
+        The open store.
+
+    Raises
+    ------
+    InputError
+        If ``path`` exists without ``resume``, holds a study with a different
+        definition, or is open in another process.
     """
     if path is None:
         return MemoryStore(definition, n)

@@ -72,21 +72,56 @@ def run_study(func, problem, n, *, seed=0, second_order=False, replicates=4, exe
     func : callable
         Picklable ``f(X: (n, d)) -> (n,)``; NaN or an exception marks a failed row.
     problem : Problem
+        The study inputs.
     n : int
         Base points N (power of 2), split into ``replicates`` scrambles of N/R.
         With ``target_width`` it is the most the study may grow to.
+    seed : int
+        Study seed; the scramble seed of each replicate and the bootstrap seed derive
+        from it.
+    second_order : bool
+        Also estimate second-order indices (2D + 2 rows per base point, not D + 2).
+    replicates : int
+        Independently scrambled replicates R (power of 2, at least 2).
     executor : concurrent.futures.Executor, optional
         None: a local pool of ``workers`` processes (``workers == 1``: in-process).
-    out : path, optional
+    workers : int
+        Processes of the local pool.
+    chunksize : int, optional
+        Rows per task; default ``func.chunksize`` if it has one, else from the design size.
+    out : str or os.PathLike, optional
         HDF5 study file; every finished chunk is flushed to it.
     resume : bool
         Continue ``out`` (must hold the same definition; a larger N extends it).
+    retry_failed : bool
+        Evaluate rows that failed before once more.
     target_width : float, optional
         Stop doubling N once every replicate interval (full width) of S1 and ST is
-        narrower than this.
+        narrower than this [-].
     model : dict, optional
         Description of the model stored with the definition (resume refuses a
         different one), e.g. ``{"function": "ishigami"}``.
+    conf_level : float
+        Confidence level of both interval kinds [-].
+    num_resamples : int
+        Bootstrap resamples of the SALib interval.
+    progress : bool
+        Show a progress bar on stderr when it is a terminal.
+    log : callable, optional
+        ``log(line)`` for warnings and progress lines; default: stderr.
+
+    Returns
+    -------
+    StudyResult
+        Indices, both intervals, checks, convergence rows and failures.
+
+    Raises
+    ------
+    InputError
+        On a bad N, R or target width, an existing ``out`` without ``resume``, a study
+        file of another definition, or too few successful blocks.
+    hdsim.sensitivity.evaluate.ModelError
+        When the model fails on every row of the first few hundred.
     """
     t0, log = time.perf_counter(), log or _stderr
     check_sizes(n, replicates)

@@ -1,21 +1,19 @@
 """Equations of motion: the elastic path and the locked-wave-generator bench as an ODE system.
 
-(The driven bench is `hdsim.simulation.driven`; it uses the same `ElasticPath` and `ODESystem`.)
-
 A system is a right-hand side ``rhs(t, y)`` over named states plus a function that
 computes labelled output signals from a solution. It is built once per (batch)
 model: parameters are flattened to floats/arrays here, not looked up per call.
 
 Batches: with ``M`` parameter sets the state vector is laid out sample-major,
 ``y[m * n + i]`` = state ``i`` of sample ``m``, so the Jacobian is block diagonal
-with ``n × n`` blocks: `ODESystem.block_jacobian` and `hdsim.simulation.block_radau` keep the
-linear algebra O(M).
+with ``n × n`` blocks: `ODESystem.block_jacobian` and `hdsim.simulation.block_radau`
+keep the linear algebra O(M).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, ClassVar
+from typing import Callable
 
 import numpy as np
 from scipy import sparse
@@ -23,130 +21,123 @@ from scipy import sparse
 from hdsim.model.drive import HarmonicDrive
 
 
+class _Body:
+    """The flexspline body as the dead zone sees it: spring with its friction, and damper."""
+
+    def __init__(self, path: "ElasticPath", friction_states):
+        self.path = path
+        self.friction_states = friction_states
+        self.base_stiffness = path.base_tangent
+
+    def static(self, body_twist):
+        return self.path.model.friction.body_torque(self.path.spring_law, body_twist, self.friction_states)
+
+    def coefficient(self, body_twist, spring_tangent):
+        return self.path.damping_coefficient(spring_tangent)
+
+    def path_tangent(self, direction, spring_torque, spring_tangent):
+        return self.path.model.friction.path_tangent(self.friction_states, direction, spring_torque,
+                                                     spring_tangent)
+
+
 @dataclass(frozen=True)
 class ElasticPath:
     """Torque through the drive as a function of output-side twist, rate and path states.
 
-    Two arrangements of the dead zone (docs/physics.md §7):
+    One arrangement for every combination of effects (docs/physics.md §7)::
 
-    * **ElastoBacklash** (series or parallel friction effects): the spring and damper sit
-      behind the dead zone as in Modelica's ElastoBacklash; the body has no state of its
-      own and the contact rule keeps the damping from pulling.
-    * **Body in series with the dead zone** (body friction, or no friction): the body
-      (spring ∥ damper ∥ Dahl friction) carries the torque the dead zone transmits. With a
-      damper the body twist lags and keeps relaxing while the output crosses the gap, so
-      the body needs a state; it is ``backlash.closure`` (:meth:`_evaluate_series_body`).
+        output ── dead zone ── body [spring u(e − slip) + friction torque ∥ damper c(e) ė] ── mesh
+
+    The backlash effect carries the series connection (`Backlash.transmit`), the
+    friction effect the body's hysteresis (`Friction.body_torque`, `Friction.rates`),
+    the hardening effect the spring law and the damping effect the coefficient; this
+    class only wires them. States: the friction states, then the backlash states.
     """
 
     model: HarmonicDrive
-    #: contact compliance of the dead zone in the body-state form, as a share of 1/K₀:
-    #: it keeps the closure state's equation regular in contact (time constant c·ε/K₀)
-    #: and adds ε·T/K₀ of twist, 3e-8 rad at rated torque, far below encoder resolution
-    contact_compliance_share: ClassVar[float] = 1e-5
 
     def __post_init__(self):
         model = self.model
         c_struct, c_mesh = model.split()
         object.__setattr__(self, "c_struct", c_struct)
         object.__setattr__(self, "c_mesh", c_mesh)
-        # stiffness at zero twist: the body's rest twist in the gap is −z/K₀
+        object.__setattr__(self, "spring_law", model.hardening.spring_law(c_struct, c_mesh))
+        # stiffness at zero twist: the dead zone's stiffness in contact and the damping reference
         object.__setattr__(self, "base_tangent", model.hardening.tangent(0.0, c_struct, c_mesh))
-        object.__setattr__(self, "load_dependent_damping",
-                           model.damping.id != "none" and bool(np.any(np.asarray(model.damping.stiffness_share) != 0)))
-        object.__setattr__(self, "series_body", model.friction.kind in ("body", "none")
-                           and model.backlash.id != "none" and model.damping.id != "none")
+        object.__setattr__(self, "n_friction", len(model.friction.state_names))
 
     @property
     def states(self) -> tuple[str, ...]:
-        """Names of the path's ODE states (friction memory, then the dead-zone closure)."""
-        names = tuple(f"friction.{name}" for name in self.model.friction.state_names)
-        return names + (("backlash.closure",) if self.series_body else ())
+        """Names of the path's ODE states (friction memory, then the backlash states)."""
+        model = self.model
+        return tuple(f"friction.{n}" for n in model.friction.state_names) + \
+            tuple(f"backlash.{n}" for n in model.backlash.state_names)
 
     @property
     def state_units(self) -> tuple[str, ...]:
-        """Unit of each of :attr:`states`, "rad" or "N·m" (sets the solver's tolerances)."""
-        units = (self.model.friction.state_unit,) * len(self.model.friction.state_names)
-        return units + (("rad",) if self.series_body else ())
+        """Unit of each of `states`, "rad" or "N·m" (sets the solver's tolerances)."""
+        model = self.model
+        return (model.friction.state_unit,) * len(model.friction.state_names) + \
+            (model.backlash.state_unit,) * len(model.backlash.state_names)
 
     def spring(self, twist):
-        return self.model.hardening.torque(twist, self.c_struct, self.c_mesh)
+        """Spring torque [N·m] at body (elastic) twist ``twist`` [rad]."""
+        return self.spring_law(twist)[0]
 
-    def damping_coefficient(self, twist):
-        """Damping coefficient [N·m·s/rad] of the body at spring twist ``twist``."""
-        if not self.load_dependent_damping:
-            return self.model.damping.coefficient
-        ratio = self.model.hardening.tangent(twist, self.c_struct, self.c_mesh) / self.base_tangent
-        return self.model.damping.coefficient_at(ratio)
+    def damping_coefficient(self, spring_tangent):
+        """Damping coefficient [N·m·s/rad] of the body where the spring's tangent is ``spring_tangent``."""
+        damping = self.model.damping
+        if not damping.follows_stiffness:
+            return damping.coefficient_at(1.0)
+        return damping.coefficient_at(spring_tangent / self.base_tangent)
 
     def evaluate(self, twist, twist_rate, states):
-        """(torque [N·m], state rates, hysteretic twist [rad])."""
+        """(torque [N·m], state rates, series friction twist [rad]) at the output twist and rate."""
         model = self.model
-        friction = model.friction
-        if self.series_body:
-            return self._evaluate_series_body(twist, twist_rate, states)
-        if friction.kind == "body":
-            return self._evaluate_body(twist, twist_rate, states)
-        hysteretic = friction.series_twist(states) if friction.kind == "series" else 0.0
-        elastic_twist = twist - hysteretic
-        engaged, contact = model.backlash.engage(elastic_twist)
-        spring_torque = self.spring(engaged)
-        elastic_rate = twist_rate
-        rates: tuple = ()
-        if friction.kind == "series":
-            tangent = model.hardening.tangent(engaged, self.c_struct, self.c_mesh) * contact
-            rates = friction.series_rates(states, twist_rate, tangent, spring_torque)
-            elastic_rate = twist_rate - sum(rates)
-        damping_torque = self.damping_coefficient(engaged) * elastic_rate * contact
-        torque = model.backlash.contact_torque(spring_torque, damping_torque)
-        if friction.kind == "parallel":
-            torque = torque + friction.parallel_torque(states, twist_rate)
-            rates = friction.parallel_rates(states, twist_rate)
-        return torque, rates, hysteretic
+        states = np.asarray(states) if len(states) else np.zeros((0,) + np.shape(twist))
+        friction_states, backlash_states = states[:self.n_friction], states[self.n_friction:]
+        body = _Body(self, friction_states)
+        torque, body_twist, body_rate, spring_torque, tangent, backlash_rates = \
+            model.backlash.transmit(twist, twist_rate, backlash_states, body)
+        friction_rates = model.friction.rates(friction_states, body_rate, spring_torque, tangent)
+        return torque, tuple(friction_rates) + tuple(backlash_rates), model.friction.series_slip(friction_states)
 
-    def _evaluate_body(self, twist, twist_rate, friction_states):
-        """Dahl friction z in the body behind the dead zone, without a damper behind it.
+    def settled(self, twist, states):
+        """Path states with the backlash states in balance with the body at output twist
+        ``twist`` [rad]: the initial condition of a drive that starts twisted."""
+        states = np.asarray(states, dtype=float) if len(states) else np.zeros((0,) + np.shape(twist))
+        friction_states = states[:self.n_friction]
+        backlash_states = self.model.backlash.settle(twist, states[self.n_friction:],
+                                                     _Body(self, friction_states))
+        return np.concatenate([friction_states, backlash_states])
 
-        The body twist is ``e = engage(x − s) + s`` with the shift ``s = −z/K₀``: in
-        contact the dead zone takes its half gap (``e = x ∓ b/2``), and in the gap the
-        body rests where its spring holds the friction torque, ``u(e) ≈ K₀ s = −z``, so
-        nothing is transmitted. Differentiating, with ``ż = D ė`` and ``D`` the Dahl
-        slope, gives ``ė = κ ẋ / (1 + (1 − κ) D/K₀)``: the body follows the output in
-        contact (κ = 1) and stands still in the gap (κ = 0). Without backlash ``e = x``
-        and the torque is ``u(x) + z + c(x) ẋ``.
+    def body_twist(self, twist, states):
+        """Twist of the body behind the dead zone [rad] (the output twist without a gap)."""
+        states = np.asarray(states) if len(states) else np.zeros((0,) + np.shape(twist))
+        body = _Body(self, states[:self.n_friction])
+        return self.model.backlash.transmit(twist, np.zeros_like(np.asarray(twist, dtype=float)),
+                                            states[self.n_friction:], body)[1]
+
+    def stored_energy(self, twist, states, nodes: int = 6, panels: int = 48):
+        """Energy stored in the path [J] at output twist ``twist`` and path ``states``.
+
+        ``V = ∫₀^ε u(x) dx`` at the spring's elastic twist ``ε = e − slip``, by composite
+        Gauss–Legendre (the smoothed knees are resolved by the panels), plus what the
+        dead zone's contact compliance holds; element-wise on arrays. Energy held by
+        friction elements counts as dissipated.
         """
-        model = self.model
-        z = friction_states[0]
-        shift = -z / self.base_tangent
-        engaged, contact = model.backlash.engage(twist - shift)
-        slope = model.friction.body_slope(z, twist_rate)
-        body_rate = contact * twist_rate / (1.0 + (1.0 - contact) * slope / self.base_tangent)
-        torque = self.spring(engaged + shift) + z + self.damping_coefficient(engaged + shift) * body_rate
-        return torque, (slope * body_rate,), 0.0
-
-    def _evaluate_series_body(self, twist, twist_rate, states):
-        """Body (spring ∥ damper ∥ optional Dahl) in series with the dead zone, state ``v``.
-
-        The dead zone transmits ``T = K₀·dz(v)``, with ``dz`` the rounded dead zone and
-        ``v`` the closure state, and takes the angle ``g = v − (1 − ε)·dz(v)``, an
-        increasing function of ``T`` (``ε``: :attr:`contact_compliance_share`). The body
-        twist is ``e = x − g`` and obeys its own balance, ``c(e) ė = T − u(e) − z``: in
-        contact it follows the output, in the gap (``T = 0``) it relaxes on its own. From
-        ``ẋ = ė + g'(v) v̇``, ``v̇ = (ẋ − ė)/(1 − (1 − ε) κ)``. Quasi-statically the output
-        twist is ``e + dz⁻¹(T/K₀) − T/K₀``, as in :mod:`hdsim.simulation.quasistatic`.
-        """
-        model = self.model
-        v = states[-1]
-        closed, contact = model.backlash.engage(v)
-        torque = self.base_tangent * closed
-        body = twist - (v - (1.0 - self.contact_compliance_share) * closed)
-        # a zero coefficient in a batch: relax within a microsecond instead of dividing by 0
-        c = np.maximum(self.damping_coefficient(body), 1e-6 * self.base_tangent)
-        has_friction = model.friction.kind == "body"
-        z = states[0] if has_friction else 0.0
-        body_rate = (torque - self.spring(body) - z) / c
-        rates = (model.friction.body_slope(z, body_rate) * body_rate,) if has_friction else ()
-        closure_rate = (twist_rate - body_rate) / (1.0 - (1.0 - self.contact_compliance_share) * contact)
-        return torque, rates + (closure_rate,), 0.0
+        states = np.asarray(states) if len(states) else np.zeros((0,) + np.shape(twist))
+        elastic = np.asarray(self.body_twist(twist, states) - self.model.friction.series_slip(
+            states[:self.n_friction]), dtype=float)
+        xi, wi = np.polynomial.legendre.leggauss(nodes)
+        edges = np.linspace(0.0, 1.0, panels + 1)
+        s = (0.5 * (edges[:-1, None] + edges[1:, None]) + 0.5 * (edges[1:, None] - edges[:-1, None]) * xi).ravel()
+        w = (0.5 * (edges[1:, None] - edges[:-1, None]) * wi).ravel()
+        cs = self.c_struct[..., None] if np.ndim(self.c_struct) else self.c_struct
+        cm = self.c_mesh[..., None] if np.ndim(self.c_mesh) else self.c_mesh
+        torque = self.model.hardening.torque(elastic[..., None] * s, cs, cm)
+        contact = self.model.backlash.stored_energy(states[self.n_friction:], self.base_tangent)
+        return elastic * np.sum(torque * w, axis=-1) + contact
 
 
 @dataclass

@@ -13,90 +13,61 @@ inertial torque ``J_out θ̈`` is ``J_out·Ṫ̇/K``: zero on a ramp, and at a c
 change ``ΔṪ`` it excites a decaying ringing of amplitude ``ΔṪ/(K ω_n) ≈ 1e-6 rad`` at most
 (less with damping), about the encoder noise. On the slow manifold there is no 600 Hz
 mode to resolve, so one step per sample suffices: this evaluator is 100–1000 times
-faster than :func:`hdsim.simulation.path.locked_wave_generator` with Radau, which is what makes
-hundreds of refits affordable (``tests/test_fit.py`` checks both agree on a slow profile).
+faster than `hdsim.simulation.path.locked_wave_generator` with Radau, which is what makes
+hundreds of refits affordable (the test suite checks both agree on a slow profile).
 
 What it solves
 --------------
-The same elastic path as :class:`hdsim.simulation.path.ElasticPath`, with the library's effect
-objects and laws (the same :class:`~hdsim.model.drive.HarmonicDrive` slots)::
+The same elastic path as `hdsim.simulation.path.ElasticPath`, through the same effect
+objects (the `HarmonicDrive` slots)::
 
-    e            body twist, behind the dead zone (spring ∥ damper ∥ Dahl friction)
-    u            = hardening.torque(e, C_s, C_m) spring torque, K_t = its tangent
-    z            Dahl friction torque, dz/de = σ (1 − z/F · sgn ė)
-    d            = c(e) · ė, c(e) = c₀ [(1 − s) + s K_t/K₀]   viscous damping torque
-    u + z + d = T(t)                             the torque balance, inertia dropped
-    x            = e + g(T), g(T) = dead_zone⁻¹(T/K₀) − T/K₀   output twist (= the angle θ)
+    e            body twist, behind the dead zone
+    B(e, s)      = friction.body_torque: spring u(e − slip(s)) + friction torque(s)
+    d            = c(e) · ė, c(e) = damping.coefficient_at(K_t/K₀)   viscous damping torque
+    B + d = T(t)                                 the torque balance, inertia dropped
+    x            = e + g(T), g = backlash.twist_at_torque(T, K₀)   output twist (= the angle θ)
 
 The dead zone is in series with the body and carries the same torque, so its angle
-``g`` is a function of the transmitted torque alone (:class:`hdsim.simulation.path.ElasticPath`).
+``g`` is a function of the transmitted torque alone.
 
 Each step from sample ``k`` to ``k+1`` solves the balance at ``t_{k+1}`` for the new
 body twist with an exponentially fitted rate for ``ė`` (the coefficient ``c(e)`` taken at
-the start of the step); the Dahl state is advanced *exactly* over the twist increment
-(the law is rate-independent: for a fixed sign of ``ė``,
-``z(e) = s F − (s F − z₀) exp(−σ|Δe|/F)``). The scalar equation per sample is
-monotone in the new body twist (the dead zone is not inside it) and is solved by Newton's
-method kept inside a bracket (bisection when a Newton step leaves it), vectorised over a
-batch of parameter sets; the output twist follows from the torque by one monotone
-inversion of the rounded dead zone. Without damping (``c = 0``) the result does not
-depend on the time step at all (rate independence).
+the start of the step); the friction states are advanced over the twist increment by
+the friction effect (`Friction.quasistatic`: exactly for Dahl, Coulomb and
+Maxwell-slip, whose laws are rate-independent, by sub-steps of the rate law for any
+other). The scalar equation per sample is monotone in the new body twist (the dead
+zone is not inside it) and is solved by Newton's method kept inside a bracket
+(bisection when a Newton step leaves it), vectorised over a batch of parameter sets;
+the output twist follows from the torque by the dead zone's inverse. Without damping
+(``c = 0``) the result does not depend on the time step at all (rate independence).
 
-A batch may mix *models*: several :class:`HarmonicDrive` objects (each single or a batch)
+A batch may mix *models*: several `HarmonicDrive` objects (each single or a batch)
 are stacked into one plan if, slot by slot, they use one effect class or none. A model
-without a family gets neutral parameters of the carrier class (``gap = 0``,
-``e_inf = 1``, ``c = 0``) or a mask (friction, the dead-zone angle), which reproduce
-"none" exactly. That lets a diagnosis evaluate every candidate model of a round, and their
+without a family gets the carrier class's neutral values (`Effect.neutral`: ``gap = 0``,
+``e_inf = 1``, ``c = 0``, a zero friction slope), which reproduce "none" exactly. That
+lets a diagnosis evaluate every candidate model of a round, and their
 finite-difference Jacobian columns, in one pass over the samples.
 
-Supported effects: hardening ``none``, ``tanh``, ``three_segment``; backlash ``none``,
-``dead_zone``; friction ``none``, ``dahl``; damping ``none``, ``viscous``. Other effects
-(``dahl_slip``, ``coulomb``, ``maxwell_slip``) raise :class:`UnsupportedEffect`; use the
-dynamic model for them (:func:`dynamic_locked_twist`).
+Every registered effect works here, including a law defined outside the package;
+`dynamic_locked_twist` is the reference with inertia.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 import numpy as np
 
-from hdsim.model import effects as fx
 from hdsim.errors import InputError
+from hdsim.model import effects as fx
 from hdsim.model.drive import HarmonicDrive
-from hdsim.physics import backlash as bl
-from hdsim.physics import damping as dp
-from hdsim.physics import friction as fr
-from hdsim.physics import stiffness as st
 
-__all__ = ["SUPPORTED", "UnsupportedEffect", "Plan", "stack_models", "locked_twist",
-           "dynamic_locked_twist", "sample_grid", "supports"]
+__all__ = ["UnsupportedEffect", "Plan", "stack_models", "locked_twist", "dynamic_locked_twist",
+           "sample_grid"]
 
-#: effect ids per family that the quasi-static evaluator handles
-SUPPORTED = {
-    "hardening": ("none", "tanh", "three_segment"),
-    "backlash": ("none", "dead_zone"),
-    "friction": ("none", "dahl"),
-    "damping": ("none", "viscous"),
-    "kinematic_error": ("none", "fourier"),  # enters the kinematic-error test only
-}
-
-#: parameters that make a carrier effect act as "none" exactly
-_NEUTRAL = {
-    ("hardening", "tanh"): {"e_inf": 1.0, "T_s": 1.0},
-    ("hardening", "three_segment"): {"T1": 1.0, "T2": 2.0, "e2": 1.0, "e3": 1.0},
-    ("backlash", "dead_zone"): {"gap": 0.0},
-    ("friction", "dahl"): {"torque_max": 1.0, "sigma": 1.0},
-    ("damping", "viscous"): {"coefficient": 0.0, "stiffness_share": 0.0},
-}
 
 class UnsupportedEffect(InputError):
-    """An effect the quasi-static evaluator does not handle."""
-
-
-def supports(model: HarmonicDrive) -> bool:
-    """True when every slot of ``model`` holds an effect this evaluator handles."""
-    return all(getattr(model, slot).id in SUPPORTED[slot] for slot in SUPPORTED)
+    """Models that cannot be stacked into one quasi-static batch."""
 
 
 @dataclass(frozen=True)
@@ -108,43 +79,25 @@ class Plan:
     c_mesh: np.ndarray
     hardening: fx.Effect
     backlash: fx.Effect
-    has_backlash: np.ndarray  # (M,) bool: the row has a dead zone
     friction: fx.Effect
-    has_friction: np.ndarray  # (M,) float 0/1
-    damping: np.ndarray  # (M,) viscous coefficient c₀ [N·m·s/rad], 0 for none
-    stiffness_share: np.ndarray  # (M,) share of c₀ proportional to the tangent stiffness
+    damping: fx.Effect
+    memory_torque: float  # largest friction memory torque of the stacked models [N·m]
     offsets: tuple[int, ...]  # first row of each stacked model
 
 
-def _carrier(slot: str, models: list[HarmonicDrive], sizes: list[int]):
-    ids = {getattr(m, slot).id for m in models}
-    for effect_id in ids:
-        if effect_id not in SUPPORTED[slot]:
-            raise UnsupportedEffect(
-                f"the quasi-static evaluator has no {slot} effect '{effect_id}'; "
-                f"it handles {', '.join(SUPPORTED[slot])}")
-    real = sorted(ids - {"none"})
-    if len(real) > 1:
-        raise InputError(f"cannot stack models with {slot} effects {real} in one batch")
-    if not real:
-        return fx.NO_EFFECT[slot], np.zeros(sum(sizes), dtype=bool)
-    cls = fx.effect_class(slot, real[0])
-    neutral = _NEUTRAL[(slot, real[0])]
-    columns = {f.name: [] for f in fields(cls)}
-    present = []
-    for model, size in zip(models, sizes):
-        effect = getattr(model, slot)
-        on = effect.id != "none"
-        present.append(np.full(size, on))
-        for name in columns:
-            value = getattr(effect, name) if on else neutral[name]
-            columns[name].append(np.broadcast_to(np.asarray(value, dtype=float), (size,)))
-    values = {name: np.concatenate(parts) for name, parts in columns.items()}
-    return cls(**values), np.concatenate(present)
+def _carrier(slot: str, models: list[HarmonicDrive], sizes: list[int]) -> fx.Effect:
+    effects = [getattr(m, slot) for m in models]
+    classes = {type(e) for e in effects if not e.is_null}
+    if len(classes) > 1:
+        names = sorted(c.id for c in classes)
+        raise UnsupportedEffect(f"cannot stack models with {slot} effects {names} in one batch")
+    if not classes:
+        return fx.NO_EFFECT[slot]
+    return classes.pop().stack(effects, sizes)
 
 
 def stack_models(models) -> Plan:
-    """Stack one or several (batch) models into a :class:`Plan` for :func:`locked_twist`."""
+    """Stack one or several (batch) models into a `Plan` for `locked_twist`."""
     if isinstance(models, HarmonicDrive):
         models = [models]
     models = list(models)
@@ -154,19 +107,12 @@ def stack_models(models) -> Plan:
         c_struct, c_mesh = model.split()
         cs.append(np.broadcast_to(np.asarray(c_struct, dtype=float), (size,)))
         cm.append(np.broadcast_to(np.asarray(c_mesh, dtype=float), (size,)))
-    hardening, _ = _carrier("hardening", models, sizes)
-    backlash, has_backlash = _carrier("backlash", models, sizes)
-    friction, has_friction = _carrier("friction", models, sizes)
-    damping, has_damping = _carrier("damping", models, sizes)
-    size = sum(sizes)
-    coefficient = np.broadcast_to(np.asarray(damping.coefficient, dtype=float) * has_damping, (size,))
-    share = np.broadcast_to(np.asarray(damping.stiffness_share, dtype=float), (size,))
     offsets = tuple(int(v) for v in np.concatenate([[0], np.cumsum(sizes)[:-1]]))
+    memory = max(float(np.max(m.friction.memory_torque())) for m in models)
     return Plan(size=int(sum(sizes)), c_struct=np.concatenate(cs), c_mesh=np.concatenate(cm),
-                hardening=hardening, backlash=backlash, has_backlash=has_backlash,
-                friction=friction, has_friction=has_friction.astype(float),
-                damping=coefficient.astype(float), stiffness_share=share.astype(float),
-                offsets=offsets)
+                hardening=_carrier("hardening", models, sizes), backlash=_carrier("backlash", models, sizes),
+                friction=_carrier("friction", models, sizes), damping=_carrier("damping", models, sizes),
+                memory_torque=memory, offsets=offsets)
 
 
 # --------------------------------------------------------------------------- the step
@@ -187,8 +133,8 @@ class _Kernel:
     """The torque balance of one step in the body twist, vectorised over the plan.
 
     The unknown is the body twist ``e`` (behind the dead zone), so the balance
-    ``Φ(u(e) + z(e), c ė) = T`` is smooth and increasing in ``e``; the output twist
-    follows from ``e`` and ``z`` afterwards (:meth:`output_twist`).
+    ``B(e) + c ė = T`` is smooth and increasing in ``e``; the output twist follows from
+    ``e`` and the torque afterwards (`output_twist`).
 
     Damping uses an *exponentially fitted* rate: over a step of length ``h`` with the
     torque linear in time, the rate entering ``d = c ė`` is ``ė = β Δe/h + γ ΔT/c``
@@ -200,93 +146,50 @@ class _Kernel:
     """
 
     def __init__(self, plan: Plan):
-        cs, cm = plan.c_struct, plan.c_mesh
-        self.k0 = 1.0 / (cs + cm)  # every supported hardening law starts from K0
-        # Law arguments are computed once per evaluation; the laws themselves are the
-        # library's pure functions (hdsim.physics), called exactly as the effects call them.
-        hardening = plan.hardening
-        if hardening.id == "none":
-            k_lin = self.k0
-            self._spring = lambda e: (k_lin * e, k_lin)
-        elif hardening.id == "tanh":
-            args = hardening._k(cs, cm)
-            self._spring = lambda e: (st.tanh_hardening_torque(e, *args),
-                                      st.tanh_hardening_tangent(e, *args))
-        elif hardening.id == "three_segment":
-            args = hardening._args(cs, cm)
-            self._spring = lambda e: (st.smooth_three_segment_torque(e, *args),
-                                      st.smooth_three_segment_tangent(e, *args))
-        else:  # pragma: no cover - guarded by stack_models
-            raise UnsupportedEffect(f"hardening '{hardening.id}'")
-        backlash = plan.backlash
-        self.gap = None
-        if backlash.id == "dead_zone":
-            self.gap = np.asarray(backlash.gap, dtype=float)
-            self.width = backlash.contact_rounding * self.gap + 1e-12
-        self.has_backlash = plan.has_backlash
-        self.friction = plan.friction.id == "dahl"
-        if self.friction:
-            self.F = np.asarray(plan.friction.torque_max, dtype=float)
-            sigma = np.asarray(plan.friction.sigma, dtype=float)
-            self.fmask = plan.has_friction
-            self.sigma_over_F = sigma / self.F
-            self.sigma_f = sigma * self.fmask  # zero slope where the row has no friction
-        self.c = plan.damping
-        self.share = plan.stiffness_share
-        self.any_damping = bool(np.any(self.c > 0))
+        self.plan = plan
+        self.k0 = 1.0 / (plan.c_struct + plan.c_mesh)  # every hardening law starts from K0
+        self.spring = plan.hardening.spring_law(plan.c_struct, plan.c_mesh)
+        self.friction = plan.friction
+        self.n_states = len(plan.friction.state_names)
+        self.damping = plan.damping
+        self.follows_stiffness = plan.damping.follows_stiffness
+        self.any_damping = bool(np.any(np.asarray(plan.damping.coefficient_at(1.0)) > 0))
         self.dg_floor = 1e-6 * self.k0
 
-    def dahl(self, z0, de):
-        """Exact Dahl update over the body-twist increment ``de`` (fixed sign) and dz/de."""
-        if not self.friction:
-            return z0, 0.0
-        direction = np.copysign(1.0, de)
-        target = direction * self.F
-        z = (target - (target - z0) * np.exp(-self.sigma_over_F * np.abs(de))) * self.fmask
-        return z, fr.dahl_slope(z, direction, self.sigma_f, self.F)
+    def zero_states(self) -> np.ndarray:
+        return np.zeros((self.n_states, self.plan.size))
 
-    def rate_coefficients(self, k, z0, dT, h):
+    def coefficient(self, spring_tangent):
+        ratio = spring_tangent / self.k0 if self.follows_stiffness else 1.0
+        return np.asarray(self.damping.coefficient_at(ratio), dtype=float)
+
+    def rate_coefficients(self, k, u, states, dT, h):
         """(c β / h, γ ΔT) of the fitted rate for a step of length h (see the class doc).
 
-        ``k`` is the spring tangent at the start of the step (from the previous step's
-        last Newton evaluation); it also sets the load-dependent coefficient ``c(e)``.
+        ``k`` and ``u`` are the spring's tangent and torque at the start of the step (from
+        the previous step's last Newton evaluation); ``k`` also sets ``c(e)``.
         """
         if not self.any_damping or not np.isfinite(h):
             return None
-        c = dp.load_dependent_coefficient(self.c, self.share, k / self.k0)
-        if self.friction:
-            direction = np.where(dT >= 0.0, 1.0, -1.0)
-            k = k + fr.dahl_slope(z0, direction, self.sigma_f, self.F)
-        mu = k * h / (c + 1e-300)  # c = 0: μ ≈ ∞, β = γ = 0
+        c = self.coefficient(k)
+        direction = np.where(dT >= 0.0, 1.0, -1.0)
+        k_body = self.friction.path_tangent(states, direction, u, k)
+        mu = k_body * h / (c + 1e-300)  # c = 0: μ ≈ ∞, β = γ = 0
         beta, gamma = _phi_functions(mu)
         return c * beta / h, gamma * dT
 
-    def balance(self, e, e0, z0, torque, rate):
-        """(residual u + z + d − T, its derivative in e, spring tangent)."""
-        u, k = self._spring(e)
-        if self.friction:
-            z, dz = self.dahl(z0, e - e0)
-            u, k_body = u + z, k + dz
-        else:
-            k_body = k
+    def balance(self, e, e0, states0, torque, rate):
+        """(residual B + d − T, its derivative in e, spring torque, spring tangent)."""
+        B, D, _, u, k = self.friction.quasistatic(states0, e0, e, self.spring)
         if rate is None:
-            return u - torque, k_body, k
+            return B - torque, D, u, k
         cb, gdT = rate
-        d = cb * (e - e0) + gdT
-        return u + d - torque, k_body + cb, k
+        return B + cb * (e - e0) + gdT - torque, D + cb, u, k
 
     def output_twist(self, e, torque):
-        """Output twist x [rad] from body twist e (rows, steps) and the torque (steps).
-
-        The dead zone carries the body's torque in series, so it takes the angle
-        ``g(T) = dead_zone⁻¹(T/K₀) − T/K₀`` (`hdsim.simulation.path.ElasticPath`): ``x = e + g(T)``.
-        """
-        if self.gap is None:  # a dead-zone carrier means at least one row has backlash
-            return e
-        v = np.asarray(torque, dtype=float)[None, :] / self.k0[:, None]
-        v = np.broadcast_to(v, e.shape)
-        y = bl.inverse_smooth_dead_zone(v, 0.5 * self.gap[:, None], self.width[:, None])
-        return np.where(self.has_backlash[:, None], e + (y - v), e)
+        """Output twist x [rad] from body twist e (rows, steps) and the torque (steps)."""
+        T = np.broadcast_to(np.asarray(torque, dtype=float)[None, :], e.shape)
+        return e + self.plan.backlash.twist_at_torque(T, self.k0[:, None])
 
 
 def locked_twist(models, time, torque, *, grid=None, tol=1e-9, x_tol=1e-8, max_iter=60,
@@ -296,7 +199,7 @@ def locked_twist(models, time, torque, *, grid=None, tol=1e-9, x_tol=1e-8, max_i
     Parameters
     ----------
     models : HarmonicDrive or list of HarmonicDrive or Plan
-        Single or batch models; several are stacked (see :func:`stack_models`).
+        Single or batch models; several are stacked (see `stack_models`).
     time : array_like, shape (n,)
         Sample times [s], strictly increasing.
     torque : array_like, shape (n,)
@@ -304,9 +207,9 @@ def locked_twist(models, time, torque, *, grid=None, tol=1e-9, x_tol=1e-8, max_i
     grid : array_like of int, int or "auto", optional
         Indices of the samples to step on (sorted, first 0, last n-1); the twist at other
         samples is interpolated linearly in time. Default: every sample. An int (a step
-        budget) or ``"auto"`` (4000) chooses the grid by :func:`sample_grid`, dense where
-        the torque is small (``|T| < 0.04·max|T| + 1.25·F`` with ``F`` the largest Dahl
-        friction torque of the batch: the gap is crossed at zero torque and the friction
+        budget) or ``"auto"`` (4000) chooses the grid by `sample_grid`, dense where
+        the torque is small (``|T| < 0.04·max|T| + 1.25·F`` with ``F`` the largest friction
+        memory torque of the batch, `Friction.memory_torque`: the gap is crossed at zero torque and the friction
         state turns over within ``±F`` of it).
     tol : float
         Torque-balance tolerance relative to ``max |T|``.
@@ -317,7 +220,8 @@ def locked_twist(models, time, torque, *, grid=None, tol=1e-9, x_tol=1e-8, max_i
     max_iter : int
         Newton iterations per step at most.
     return_states : bool
-        Also return the Dahl friction torque ``z`` [N·m].
+        Also return the friction states: shape (M, n) for a one-state law (the Dahl
+        torque ``z`` [N·m]), else (n_states, M, n).
 
     Returns
     -------
@@ -335,48 +239,47 @@ def _locked_twist(plan, time, torque, grid, tol, x_tol, max_iter, return_states)
     T = np.asarray(torque, dtype=float)
     if isinstance(grid, str) or (isinstance(grid, (int, np.integer)) and not isinstance(grid, bool)):
         budget = 4000 if isinstance(grid, str) else int(grid)
-        f_max = 0.0
-        if plan.friction.id == "dahl":
-            f_max = float(np.max(np.asarray(plan.friction.torque_max) * plan.has_friction))
         t_max = max(float(np.max(np.abs(T))), 1e-12)
-        grid = sample_grid(t, T, max_steps=budget, zero_band=min(0.04 + 1.25 * f_max / t_max, 0.5))
+        grid = sample_grid(t, T, max_steps=budget,
+                           zero_band=min(0.04 + 1.25 * plan.memory_torque / t_max, 0.5))
     idx = np.arange(t.size) if grid is None else np.asarray(grid, dtype=int)
     tg, Tg = t[idx], T[idx]
     kern = _Kernel(plan)
     M = plan.size
     tol_T = tol * max(float(np.max(np.abs(T))), 1e-12)
     e_out = np.empty((M, idx.size))
-    z_out = np.empty((M, idx.size)) if return_states else None
+    s_out = np.empty((kern.n_states, M, idx.size)) if return_states else None
     k0 = kern.k0
-    zeros = np.zeros(M)
-    e, z, k = _solve(kern, Tg[0] / k0, zeros, zeros, Tg[0], None, tol_T, x_tol,
-                     max_iter, np.abs(Tg[0]) / k0)
+    e, s, u, k = _solve(kern, Tg[0] / k0, np.zeros(M), kern.zero_states(), Tg[0], None, tol_T, x_tol,
+                        max_iter, np.abs(Tg[0]) / k0)
     e_out[:, 0] = e
     if return_states:
-        z_out[:, 0] = z
+        s_out[:, :, 0] = s
     e_prev, h_prev = e, None
     for j in range(1, idx.size):
         h = tg[j] - tg[j - 1]
         dT = Tg[j] - Tg[j - 1]
         guess = e + dT / k0 if h_prev is None else e + (e - e_prev) * (h / h_prev)
-        rate = kern.rate_coefficients(k, z, dT, h)
-        e_new, z, k = _solve(kern, guess, e, z, Tg[j], rate, tol_T, x_tol, max_iter,
-                             np.abs(dT) / k0)
+        rate = kern.rate_coefficients(k, u, s, dT, h)
+        e_new, s, u, k = _solve(kern, guess, e, s, Tg[j], rate, tol_T, x_tol, max_iter,
+                                np.abs(dT) / k0)
         e_prev, e, h_prev = e, e_new, h
         e_out[:, j] = e
         if return_states:
-            z_out[:, j] = z
+            s_out[:, :, j] = s
     if idx.size != t.size:
         # the body twist is smooth between steps; the dead-zone angle is exact at every sample
         e_out = _interp_rows(t, tg, e_out)
         if return_states:
-            z_out = _interp_rows(t, tg, z_out)
+            s_out = np.array([_interp_rows(t, tg, rows) for rows in s_out]).reshape(kern.n_states, M, t.size)
     x_out = kern.output_twist(e_out, T)
-    return (x_out, z_out) if return_states else x_out
+    if not return_states:
+        return x_out
+    return x_out, (s_out[0] if kern.n_states == 1 else s_out)
 
 
-def _solve(kern, guess, e0, z0, torque, rate, tol_T, x_tol, max_iter, x_scale):
-    """Newton on the monotone balance of one step: (body twist, friction state, tangent).
+def _solve(kern, guess, e0, s0, torque, rate, tol_T, x_tol, max_iter, x_scale):
+    """Newton on the monotone balance of one step: (body twist, friction states, spring torque, tangent).
 
     Plain Newton steps first; if they have not converged after three, the iteration
     keeps a bracket (the balance is increasing in e) and bisects when a Newton step
@@ -385,7 +288,7 @@ def _solve(kern, guess, e0, z0, torque, rate, tol_T, x_tol, max_iter, x_scale):
     x = guess
     lo = hi = None
     for it in range(max_iter):
-        g, dg, k = kern.balance(x, e0, z0, torque, rate)
+        g, dg, u, k = kern.balance(x, e0, s0, torque, rate)
         # the balance is increasing in e (dg ≥ spring tangent > 0); the floor guards round-off
         step = -g / np.maximum(dg, kern.dg_floor)
         if it >= 3:
@@ -407,8 +310,8 @@ def _solve(kern, guess, e0, z0, torque, rate, tol_T, x_tol, max_iter, x_scale):
         x = x + step
         if np.abs(step).max() <= x_tol:
             break
-    z = kern.dahl(z0, x - e0)[0] if kern.friction else z0
-    return x, z, k
+    s = kern.friction.advance(s0, e0, x, kern.spring) if kern.n_states else s0
+    return x, s, u, k
 
 
 def _interp_rows(t, tg, values):
@@ -456,7 +359,7 @@ def sample_grid(time, torque, max_steps: int = 4000, zero_band: float = 0.04):
 
 
 def dynamic_locked_twist(model: HarmonicDrive, time, torque, options=None) -> np.ndarray:
-    """The same bench with inertia, by :func:`hdsim.simulation.path.locked_wave_generator` (slow).
+    """The same bench with inertia, by `hdsim.simulation.path.locked_wave_generator` (slow).
 
     The measured torque is interpolated linearly between samples. Any effect is allowed;
     this is the reference the quasi-static evaluator is tested against, and the fallback

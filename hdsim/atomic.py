@@ -14,7 +14,21 @@ from pathlib import Path
 
 @contextlib.contextmanager
 def atomic_path(target: str | os.PathLike):
-    """Yield a temporary path in the target's folder; rename it over ``target`` on success."""
+    """Yield a temporary path beside ``target``; rename it over ``target`` on success.
+
+    The temporary file gets the mode an ordinary new file would get (umask applied);
+    on an exception it is removed and ``target`` is left untouched.
+
+    Parameters
+    ----------
+    target : str or os.PathLike
+        The file to write; missing folders are created.
+
+    Yields
+    ------
+    pathlib.Path
+        The temporary file to write to.
+    """
     target = Path(target)
     target.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
@@ -33,5 +47,14 @@ def atomic_path(target: str | os.PathLike):
 
 
 def write_text_atomic(target: str | os.PathLike, text: str) -> None:
+    """Write text to a file atomically.
+
+    Parameters
+    ----------
+    target : str or os.PathLike
+        The file to write; missing folders are created.
+    text : str
+        The content, written in the platform's default encoding.
+    """
     with atomic_path(target) as tmp:
         tmp.write_text(text)

@@ -1,0 +1,303 @@
+"""The least-squares problem of a fit: free parameters, transforms, start values, evaluator.
+
+The measured torque drives the model and the measured angle is what it must predict.
+The model is a `HarmonicDrive` whose slots hold the chosen effects; it is evaluated
+by the quasi-static bench evaluator (`hdsim.simulation.quasistatic`: inertia
+dropped, the library's effect laws), so the fitted model is an ordinary model that
+the dynamic simulator can run again.
+
+Free parameters
+---------------
+The base model's low-load stiffness ``K0`` plus what each effect declares
+(`Effect.free_parameters`: names, bounds, start values from the data). Inside the
+optimiser each parameter is mapped to an unbounded coordinate (``p = lo + e^u`` for a
+one-sided bound, ``p = lo + (hi − lo)·sigmoid(u)`` for two), so every trial model is
+valid. ``K0`` (and a hardening law's high-load stiffness ratio) is turned into model
+parameters by `split_stiffness`; each effect maps its own fitted values back onto its
+fields (`Effect.fit_updates`).
+
+The angle offset and, for a kinematic-error test, the coefficients of the
+kinematic-error effect's linear basis (`KinematicError.linear_basis`) are solved exactly
+for every trial by linear least squares (variable projection), so the offset is
+always fitted and never counted as error.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from hdsim.identification.residuals import _direction as loading_direction
+from hdsim.io.measurement import Measurement
+from hdsim.model.drive import SLOTS, HarmonicDrive, compliance_chain
+from hdsim.model.effects import FitContext
+from hdsim.simulation.quasistatic import locked_twist
+
+__all__ = ["K0_NAME", "Evaluator", "FitProblem", "fit_context", "make_problem", "split_stiffness"]
+
+#: the base model's free parameter: the low-load stiffness K0 [N·m/rad] (internal)
+K0_NAME = "stiffness.K0"
+#: engagement ratio used when the structure must be stiffened to reach K∞
+E_INF_CAP = 100.0
+
+
+# --------------------------------------------------------------------------- data signatures
+
+
+def relative_angle(meas: Measurement) -> np.ndarray:
+    """Angle relative to the kinematic ideal [rad] (stiffness test: the angle itself)."""
+    if meas.test == "kinematic_error":
+        return meas.kinematic_error
+    return np.asarray(meas.angle, dtype=float)
+
+
+def loading_slope(meas: Measurement, lo: float = 0.1, hi: float = 0.5) -> float:
+    """Secant stiffness [N·m/rad] from angle vs torque for lo < |T|/max|T| < hi."""
+    T = np.asarray(meas.torque, dtype=float)
+    y = relative_angle(meas)
+    a = np.abs(T) / max(np.max(np.abs(T)), 1e-12)
+    m = (a > lo) & (a < hi)
+    if np.count_nonzero(m) < 5 or np.ptp(T[m]) <= 0:
+        m = np.ones_like(T, dtype=bool)
+    if np.ptp(T[m]) <= 0:
+        return float("nan")
+    slope = np.polyfit(T[m], y[m], 1)[0]
+    return 1.0 / slope if slope > 0 else float("nan")
+
+
+def zero_torque_signatures(meas: Measurement) -> dict:
+    """Loop width and step at zero torque [rad], median |dT/dt| [N·m/s]."""
+    T = np.asarray(meas.torque, dtype=float)
+    y = relative_angle(meas)
+    Tmax = max(np.max(np.abs(T)), 1e-12)
+    sign, speed = loading_direction(meas.time, T)
+    out = {"loop_width": 0.0, "step": 0.0, "rate": float(np.median(speed))}
+    near = (np.abs(T) < 0.15 * Tmax) & (np.abs(T) > 0.02 * Tmax)
+    values = {}
+    for direction in (+1, -1):
+        on = near & (sign == direction)
+        pos, neg = on & (T > 0), on & (T < 0)
+        if np.count_nonzero(pos) >= 3 and np.count_nonzero(neg) >= 3:
+            cp = np.polyfit(T[pos], y[pos], 1)
+            cn = np.polyfit(T[neg], y[neg], 1)
+            values[direction] = (cp[1], cn[1])
+    if len(values) == 2:
+        up_mid = 0.5 * sum(values[+1])
+        down_mid = 0.5 * sum(values[-1])
+        out["loop_width"] = float(max(down_mid - up_mid, 0.0))
+        out["step"] = float(max(0.5 * ((values[+1][0] - values[+1][1]) + (values[-1][0] - values[-1][1])), 0.0))
+    return out
+
+
+def fit_context(meas: Measurement, model: HarmonicDrive) -> FitContext:
+    """What the record says before any fit (loading slope, loop width, step, rate)."""
+    linear = model.hardening.is_null
+    K = loading_slope(meas, 0.1, 0.6) if linear else loading_slope(meas, 0.05, 0.3)
+    if not np.isfinite(K):
+        K = float(model.base_stiffness)
+    sig = zero_torque_signatures(meas)
+    return FitContext(stiffness=float(K), max_torque=float(np.max(np.abs(meas.torque))),
+                      loop_width=sig["loop_width"], step=sig["step"], rate=sig["rate"], linear_spring=linear)
+
+
+# --------------------------------------------------------------------------- stiffness split
+
+
+def split_stiffness(model: HarmonicDrive, K0, ratio=1.0, e_cap: float = E_INF_CAP):
+    """Model parameters that give low-load stiffness ``K0`` and high-load ``K∞ = ratio·K0``.
+
+    The unit's closed forms split the compliance into a structural part ``C_s`` and a
+    mesh-zone part ``κ C_m``; hardening can only remove mesh-zone compliance
+    (``K∞ = 1/(C_s + κ C_m/e)``). With the nominal geometry ``κ`` sets K0 and the
+    engagement ratio ``e`` sets K∞. When K∞ (or K0) is beyond what the nominal structure
+    allows, the flexspline modulus ``E`` is raised (``C_s ∝ 1/E``) so that ``e = e_cap``.
+    The bench response depends on K0 and K∞ only, so this choice is a convention of the
+    write-back, not a fit assumption.
+
+    Returns
+    -------
+    tuple
+        (dotted updates {name: array}, engagement ratio array in [1, 100]).
+    """
+    K0 = np.asarray(K0, dtype=float)
+    ratio = np.broadcast_to(np.asarray(ratio, dtype=float), K0.shape)
+    g, wg = model.geometry, model.wave_generator
+    chain = compliance_chain(g, wg, 1.0)
+    cs0, cm0 = float(np.asarray(chain.structure)), float(np.asarray(chain.mesh_zone))
+    E0 = float(np.asarray(g.E))
+    C0 = 1.0 / K0
+    Cinf = 1.0 / (ratio * K0)
+    hard = ratio > 1.0 + 1e-12
+    kappa_a = (C0 - cs0) / cm0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        e_a = np.where(hard, kappa_a * cm0 / (Cinf - cs0), 1.0)
+    ok = (kappa_a > 1e-3) & (~hard | ((Cinf > cs0) & (e_a >= 1.0) & (e_a <= e_cap)))
+    # stiffen the structure: e = e_cap (or the structure takes half of C0 without hardening)
+    share = np.where(hard, (1.0 - 1.0 / ratio) / (1.0 - 1.0 / e_cap), 0.5)
+    cs_target = C0 * (1.0 - share)
+    E_b = E0 * cs0 / cs_target
+    chain_b = compliance_chain(replace(g, E=np.where(ok, E0, E_b)), wg, 1.0)
+    cm_b = np.asarray(chain_b.mesh_zone, dtype=float)
+    kappa_b = share * C0 / cm_b
+    out = {"calibration.kappa_mesh": np.where(ok, kappa_a, kappa_b)}
+    if not np.all(ok):
+        out["flexspline.E"] = np.where(ok, E0, E_b)
+    e = np.where(ok, e_a, np.where(hard, e_cap, 1.0))
+    return out, np.clip(e, 1.0, 100.0)
+
+
+# --------------------------------------------------------------------------- transforms
+
+
+@dataclass(frozen=True)
+class Transform:
+    """Bounded physical parameter ↔ unbounded optimiser coordinate."""
+
+    lo: float
+    hi: float
+
+    def to_phys(self, u):
+        u = np.asarray(u, dtype=float)
+        if math.isfinite(self.hi):
+            return self.lo + (self.hi - self.lo) / (1.0 + np.exp(-np.clip(u, -700, 700)))
+        return self.lo + np.exp(np.clip(u, -700, 700))
+
+    def to_internal(self, p):
+        p = float(p)
+        span = self.hi - self.lo
+        if math.isfinite(self.hi):
+            f = min(max((p - self.lo) / span, 1e-12), 1.0 - 1e-9)
+            return math.log(f / (1.0 - f))
+        return math.log(max(p - self.lo, 1e-300))
+
+    def dphys_du(self, u):
+        u = np.asarray(u, dtype=float)
+        if math.isfinite(self.hi):
+            s = 1.0 / (1.0 + np.exp(-np.clip(u, -700, 700)))
+            return (self.hi - self.lo) * s * (1.0 - s)
+        return np.exp(np.clip(u, -700, 700))
+
+
+def _k0_transform(model: HarmonicDrive) -> Transform:
+    chain = compliance_chain(model.geometry, model.wave_generator, 1.0)
+    cs0, cm0 = float(np.asarray(chain.structure)), float(np.asarray(chain.mesh_zone))
+    return Transform(1.0 / (cs0 + 900.0 * cm0), math.inf)
+
+
+# --------------------------------------------------------------------------- evaluator
+
+
+class Evaluator:
+    """Model predictions and the linear (projected) part for one measurement.
+
+    Stiffness test: predicted angle = offset + quasi-static twist under the measured
+    torque. Kinematic-error test: predicted output angle = offset + wg/ratio + twist under
+    the measured load torque + kinematic error (the kinematic-error effect's linear basis).
+    """
+
+    def __init__(self, meas: Measurement, max_steps: int = 4000):
+        self.meas = meas
+        self.test = meas.test
+        self.t = np.asarray(meas.time, dtype=float)
+        self.T = np.asarray(meas.torque, dtype=float)
+        self.y = np.asarray(meas.angle, dtype=float)
+        self.n = self.t.size
+        # all samples up to max_steps, else a step budget (the grid adapts to each batch)
+        self.grid = None if self.n <= max_steps else int(max_steps)
+        if self.test == "kinematic_error":
+            self.wg = np.asarray(meas.wg_angle, dtype=float)
+            self.ideal = self.wg / float(meas.ratio)
+        else:
+            self.wg = None
+            self.ideal = np.zeros(self.n)
+        self.y_rel = self.y - self.ideal
+
+    def basis(self, model: HarmonicDrive) -> np.ndarray:
+        """The columns solved linearly: the offset, then the kinematic error's basis."""
+        ones = np.ones((self.n, 1))
+        if self.wg is None:
+            return ones
+        extra = model.kinematic_error.linear_basis(self.wg, self.ideal)
+        return ones if extra is None else np.hstack([ones, extra])
+
+    def twist(self, models) -> np.ndarray:
+        """(M, n) quasi-static twist of the stacked models."""
+        return locked_twist(models, self.t, self.T, grid=self.grid)
+
+
+# --------------------------------------------------------------------------- problems
+
+
+@dataclass
+class FitProblem:
+    """One least-squares fit: a model structure, its free parameters and the rows it fits."""
+
+    model: HarmonicDrive
+    names: list[str]
+    transforms: list[Transform]
+    rows: np.ndarray  # bool (n,): the rows whose residual is minimised
+    u: np.ndarray  # internal coordinates, current
+    basis: np.ndarray  # (n, k) columns solved linearly (offset first)
+    label: str = ""
+    max_iter: int = 25
+    # optimiser state
+    cost: float = np.inf
+    lam: float = 1e-2
+    J: np.ndarray | None = None
+    r: np.ndarray | None = None
+    done: bool = False
+    iterations: int = 0
+    stalls: int = 0
+    message: str = ""
+    extra: dict = field(default_factory=dict)
+
+    def phys(self, U: np.ndarray) -> dict[str, np.ndarray]:
+        """Fitted coordinates (K0 and the effects' dotted free parameters) for rows of U."""
+        U = np.atleast_2d(U)
+        return {name: tr.to_phys(U[:, j]) for j, (name, tr) in enumerate(zip(self.names, self.transforms))}
+
+    def updates(self, U: np.ndarray) -> dict[str, np.ndarray]:
+        """Dotted model updates for rows of U (K0 and stiffness ratios mapped by `split_stiffness`)."""
+        values = self.phys(U)
+        K0 = values.pop(K0_NAME)
+        per_family = {family: {} for family in SLOTS}
+        for name, value in values.items():
+            family, _, local = name.partition(".")
+            per_family[family][local] = value
+        ratio = self.model.hardening.stiffness_ratio(per_family["hardening"])
+        out, engagement = split_stiffness(self.model, K0, ratio)
+        for family in SLOTS:
+            if per_family[family]:
+                out.update(getattr(self.model, family).fit_updates(per_family[family], engagement=engagement))
+        return out
+
+    def batch_model(self, U: np.ndarray) -> HarmonicDrive:
+        if not self.names:
+            return self.model
+        return self.model.with_updates(self.updates(U))
+
+    def fd_steps(self) -> np.ndarray:
+        return 1e-5 * np.maximum(1.0, np.abs(self.u)) if self.u.size else self.u
+
+
+def make_problem(model: HarmonicDrive, meas: Measurement, ev: Evaluator, rows=None, start: dict | None = None,
+                 label: str = "", context: FitContext | None = None) -> FitProblem:
+    """The fit of ``model`` to ``meas``: K0 plus each effect's free parameters.
+
+    ``start`` overrides start values by name (``stiffness.K0``, ``family.parameter``).
+    """
+    context = context or fit_context(meas, model)
+    start = start or {}
+    names, transforms, values = [K0_NAME], [_k0_transform(model)], [context.stiffness]
+    for family in SLOTS:
+        for fp in getattr(model, family).free_parameters(context):
+            names.append(f"{family}.{fp.name}")
+            transforms.append(Transform(fp.lower, fp.upper))
+            values.append(fp.start)
+    values = [start.get(n, v) for n, v in zip(names, values)]
+    u = np.array([tr.to_internal(v) for tr, v in zip(transforms, values)], dtype=float)
+    rows = np.ones(len(meas), dtype=bool) if rows is None else np.asarray(rows, dtype=bool)
+    return FitProblem(model=model, names=names, transforms=transforms, rows=rows, u=u,
+                      basis=ev.basis(model), label=label)

@@ -1,0 +1,405 @@
+"""Rules of the measurement-file format: column names, column maps, ``#`` keys, values.
+
+Shared by the CSV and HDF5 readers (`hdsim.io.measurement_readers`) and by
+`hdsim.io.measurement.make_measurement`, so that a file and a set of arrays are refused
+for the same problems with the same words. The format itself is described in
+docs/measurements.md.
+
+Every check raises `hdsim.errors.InputError` with one line that names the file, the
+place (CSV line, HDF5 row, column or attribute) and what was expected.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+
+import numpy as np
+
+from hdsim.errors import InputError
+from hdsim.units import ANGLE_UNITS
+
+__all__ = [
+    "TESTS",
+    "ANGLE_UNITS",
+    "MIN_ROWS",
+    "RATED_KEYS",
+    "Where",
+    "parse_column_map",
+    "check_map_keys",
+    "canonical_names",
+    "split_unit",
+    "quote_cell",
+    "interpret_meta",
+    "resolve_columns",
+    "check_values",
+]
+
+#: Columns each test needs, by canonical SI name.
+TESTS: dict[str, tuple[str, ...]] = {
+    "stiffness": ("time_s", "torque_Nm", "angle_rad"),
+    "kinematic_error": ("time_s", "wg_angle_rad", "output_angle_rad", "torque_Nm"),
+}
+
+#: Fewest data rows a file may hold; below this nothing can be fitted.
+MIN_ROWS = 10
+
+#: ``#`` keys that give the rated torque, in order of preference. The keys ``test``,
+#: ``ratio`` and these are interpreted; all others are kept in ``meta`` untouched.
+RATED_KEYS = ("rated_torque_Nm", "rated_torque")
+
+_ANGLE_BASES = ("angle", "wg_angle", "output_angle")
+
+
+# --------------------------------------------------------------------------- names
+
+
+def split_unit(name: str) -> tuple[str, str] | None:
+    """Split an angle column name into its base and unit.
+
+    Parameters
+    ----------
+    name : str
+        A column name, e.g. ``'wg_angle_deg'``.
+
+    Returns
+    -------
+    tuple of (str, str) or None
+        ``('wg_angle', 'deg')``; None if ``name`` is not an angle column name.
+    """
+    for base in _ANGLE_BASES:
+        for unit in ANGLE_UNITS:
+            if name == f"{base}_{unit}":
+                return base, unit
+    return None
+
+
+def canonical_names(test: str | None = None) -> list[str]:
+    """Every accepted column name (all unit spellings) of one test or of any test.
+
+    Parameters
+    ----------
+    test : str, optional
+        ``'stiffness'`` or ``'kinematic_error'``; None for the names of both tests.
+
+    Returns
+    -------
+    list of str
+        The names in the order of `TESTS`, each angle in every unit of
+        `hdsim.units.ANGLE_UNITS`.
+    """
+    tests = [test] if test else list(TESTS)
+    names: list[str] = []
+    for t in tests:
+        for col in TESTS[t]:
+            split = split_unit(col)
+            spellings = [f"{split[0]}_{u}" for u in ANGLE_UNITS] if split else [col]
+            names += [s for s in spellings if s not in names]
+    return names
+
+
+def parse_column_map(text: str) -> dict[str, str]:
+    """Parse a CLI column map ``'time_s=t,torque_Nm=T_out,angle_deg=pos'``.
+
+    Parameters
+    ----------
+    text : str
+        Comma-separated ``canonical=name_in_file`` pairs. The canonical side is a
+        canonical column name (docs/measurements.md); angle names may carry ``_rad``,
+        ``_deg``, ``_arcmin`` or ``_arcsec`` to give the unit of the file's column.
+
+    Returns
+    -------
+    dict of str to str
+        Canonical name -> column name in the file.
+
+    Raises
+    ------
+    InputError
+        On a pair without ``=``, an empty side, an unknown canonical name or a
+        canonical name given twice.
+    """
+    mapping: dict[str, str] = {}
+    for pair in (p.strip() for p in str(text).split(",")):
+        if not pair:
+            continue
+        key, sep, value = pair.partition("=")
+        key, value = key.strip(), value.strip()
+        if not sep or not key or not value:
+            raise InputError(
+                f"--columns: malformed pair '{pair}'; expected canonical=name_in_file, "
+                "e.g. time_s=t,torque_Nm=T_out,angle_deg=pos"
+            )
+        if key in mapping:
+            raise InputError(f"--columns: '{key}' given twice")
+        mapping[key] = value
+    if not mapping:
+        raise InputError("--columns: empty column map; expected e.g. time_s=t,torque_Nm=T_out")
+    check_map_keys(mapping, "--columns")
+    return mapping
+
+
+def check_map_keys(mapping: dict[str, str], where: str) -> None:
+    """Refuse a column map with an unknown canonical name or a file column read twice.
+
+    Parameters
+    ----------
+    mapping : dict of str to str
+        Canonical name -> column name in the file.
+    where : str
+        What the message starts with (the file, or ``'--columns'``).
+
+    Raises
+    ------
+    InputError
+        On an unknown canonical name (with the closest known names), an empty file
+        column name, or one file column mapped twice.
+    """
+    known = canonical_names()
+    for key, value in mapping.items():
+        if key not in known:
+            close = difflib.get_close_matches(key, known, n=3, cutoff=0.5)
+            hint = f"did you mean {', '.join(close)}?" if close else f"known: {', '.join(known)}"
+            raise InputError(f"{where}: unknown canonical column '{key}' in the column map; {hint}")
+        if not isinstance(value, str) or not value:
+            raise InputError(f"{where}: column map entry '{key}' needs a column name in the file")
+    targets = list(mapping.values())
+    for value in targets:
+        if targets.count(value) > 1:
+            raise InputError(f"{where}: column map reads file column '{value}' twice")
+
+
+def quote_cell(cell: str, limit: int = 30) -> str:
+    """A cell quoted for a one-line message, shortened and free of line breaks.
+
+    Parameters
+    ----------
+    cell : str
+        The text as found in the file.
+    limit : int
+        Longest quoted text [characters].
+
+    Returns
+    -------
+    str
+        ``repr(cell)``, cut to ``limit`` characters with ``...`` when longer.
+    """
+    text = repr(cell)
+    return text if len(text) <= limit else text[: limit - 4] + "...'"
+
+
+# --------------------------------------------------------------------------- checks
+
+
+class Where:
+    """Turns a 0-based data row into the words a message uses (CSV line or HDF5 row).
+
+    Parameters
+    ----------
+    path : str
+        The file (or label) every message starts with.
+    lines : list of int, optional
+        CSV: the file line (1-based) of each data row; None names rows instead.
+    """
+
+    def __init__(self, path: str, lines: list[int] | None = None):
+        self.path = path
+        self.lines = lines
+
+    def row(self, i: int) -> str:
+        """``'line N'`` (CSV) or ``'row N'`` for data row ``i`` (0-based)."""
+        if self.lines is not None:
+            return f"line {self.lines[i]}"
+        return f"row {i + 1}"
+
+    def fail(self, text: str) -> InputError:
+        """The error to raise: ``text`` after the file name."""
+        return InputError(f"{self.path}: {text}")
+
+
+def _parse_number(where: Where, key: str, value: str, origin: str, *,
+                  positive=False, nonzero=False) -> float:
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        number = math.nan
+    if not math.isfinite(number) or (positive and number <= 0) or (nonzero and number == 0):
+        need = "a positive number" if positive else "a non-zero number" if nonzero else "a number"
+        raise where.fail(f"{origin}'# {key}:' is {quote_cell(str(value))}; expected {need}")
+    return number
+
+
+def interpret_meta(
+    meta: dict[str, str], where: Where, origin: dict[str, str] | None = None
+) -> tuple[str, float | None, float | None]:
+    """``test``, ``ratio`` and ``rated_torque`` from the ``#`` keys, checked.
+
+    Parameters
+    ----------
+    meta : dict of str to str
+        Every ``#`` key (HDF5: attribute) as text.
+    where : Where
+        Names the file in messages.
+    origin : dict of str to str, optional
+        Key -> where it was read (``'line 2: '``), put in front of a message.
+
+    Returns
+    -------
+    tuple of (str, float or None, float or None)
+        The test, the transmission ratio [-] and the rated torque [N·m].
+
+    Raises
+    ------
+    InputError
+        On a missing or unknown test, a missing ratio (kinematic_error), or a ratio or
+        rated torque that is not a number (zero ratio, rated torque not positive).
+    """
+    origin = origin or {}
+    tests = " or ".join(TESTS)
+    if "test" not in meta:
+        raise where.fail("no '# test:' key; expected '# test: stiffness' or "
+                         "'# test: kinematic_error' (HDF5: a 'test' attribute)")
+    test = meta["test"].strip()
+    if test not in TESTS:
+        close = difflib.get_close_matches(test, list(TESTS), n=1, cutoff=0.5)
+        hint = f" (did you mean {close[0]}?)" if close else ""
+        raise where.fail(f"{origin.get('test', '')}unknown test {quote_cell(test)}{hint}; "
+                         f"expected {tests}")
+    ratio = None
+    if "ratio" in meta:
+        ratio = _parse_number(where, "ratio", meta["ratio"], origin.get("ratio", ""),
+                              nonzero=True)
+    elif test == "kinematic_error":
+        raise where.fail("no '# ratio:' key; a kinematic_error file needs the transmission "
+                         "ratio, e.g. '# ratio: 100'")
+    rated = None
+    for key in RATED_KEYS:
+        if key in meta:
+            rated = _parse_number(where, key, meta[key], origin.get(key, ""), positive=True)
+            break
+    return test, ratio, rated
+
+
+def resolve_columns(
+    header: list[str], test: str, columns: dict[str, str] | None, where: Where, what: str
+) -> dict[str, tuple[int, float]]:
+    """Map each canonical SI column of ``test`` to (index in ``header``, unit factor).
+
+    Parameters
+    ----------
+    header : list of str
+        The file's column (CSV) or dataset (HDF5) names, in file order.
+    test : str
+        ``'stiffness'`` or ``'kinematic_error'``.
+    columns : dict of str to str or None
+        Column map, canonical name -> name in the file. With a map, file columns that
+        are neither mapped nor canonical are ignored.
+    where : Where
+        Names the file in messages.
+    what : str
+        ``'column'`` (CSV) or ``'dataset'`` (HDF5), for messages.
+
+    Returns
+    -------
+    dict of str to tuple of (int, float)
+        Canonical SI name (``'angle_rad'``) -> (index in ``header``, size of the file's
+        unit [rad], 1.0 for columns that are not angles).
+
+    Raises
+    ------
+    InputError
+        On a nameless or repeated header name, a map naming a column the file lacks, an
+        unknown column, two columns giving the same quantity, or a missing column.
+    """
+    for i, name in enumerate(header):
+        if not name:
+            raise where.fail(f"{what} {i + 1} of the header has no name")
+        if header.count(name) > 1:
+            raise where.fail(f"{what} '{name}' appears twice in the header")
+    # Rename the file's columns to canonical names by the map (canonical -> file).
+    canonical_of: dict[str, str] = {}
+    if columns:
+        check_map_keys(columns, where.path)
+        for key, file_name in columns.items():
+            if file_name not in header:
+                raise where.fail(f"column map reads '{key}' from {what} '{file_name}', which is "
+                                 f"not in the file (it has {', '.join(header)})")
+            canonical_of[file_name] = key
+    allowed = canonical_names(test)
+    needed = TESTS[test]
+    found: dict[str, tuple[int, str]] = {}  # canonical SI name -> (index, canonical spelling)
+    for i, name in enumerate(header):
+        spelled = canonical_of.get(name, name)
+        if spelled not in allowed:
+            if columns and name not in canonical_of and spelled not in canonical_names():
+                continue  # a column map names the columns to read; the rest are ignored
+            raise where.fail(_unknown_column_text(name, spelled, test, what, bool(columns)))
+        split = split_unit(spelled)
+        si = f"{split[0]}_rad" if split else spelled
+        if si in found:
+            first, first_spelled = header[found[si][0]], found[si][1]
+
+            def shown(n, sp):
+                return f"'{n}'" if n == sp else f"'{n}' (mapped to {sp})"
+
+            raise where.fail(f"{what}s {shown(first, first_spelled)} and {shown(name, spelled)} "
+                             f"both give {si}; expected one of them")
+        found[si] = (i, spelled)
+    for si in needed:
+        if si not in found:
+            split = split_unit(si)
+            alt = f" (or {split[0]}_deg/_arcmin/_arcsec)" if split else ""
+            raise where.fail(f"missing {what} '{si}'{alt}; a {test} file needs "
+                             f"{', '.join(needed)}")
+    return {si: (i, ANGLE_UNITS[split_unit(sp)[1]] if split_unit(sp) else 1.0)
+            for si, (i, sp) in found.items()}
+
+
+def _unknown_column_text(name: str, spelled: str, test: str, what: str, mapped: bool) -> str:
+    allowed = canonical_names(test)
+    shown = f"'{name}'" if name == spelled else f"'{name}' (mapped to {spelled})"
+    close = difflib.get_close_matches(spelled, allowed, n=2, cutoff=0.6)
+    hint = f" (did you mean {' or '.join(close)}?)" if close else ""
+    if spelled in canonical_names():
+        hint = " (a column of the other test; is '# test:' right?)"
+    if "," not in name and (";" in name or "\t" in name):
+        hint = " (the separator must be a comma)"
+    extra = "" if mapped else "; use a column map for another bench's names"
+    return (f"unknown {what} {shown}{hint}; a {test} file has {', '.join(TESTS[test])} "
+            f"(angles may end in _deg, _arcmin, _arcsec){extra}")
+
+
+def check_values(data: dict[str, np.ndarray], where: Where, names: dict[str, str]) -> None:
+    """Refuse anything but finite numbers, enough rows and strictly increasing time.
+
+    Parameters
+    ----------
+    data : dict of str to numpy.ndarray
+        Canonical SI name -> values in SI units; must hold ``time_s`` [s].
+    where : Where
+        Names the file and the row in messages.
+    names : dict of str to str
+        Canonical SI name -> how the message names the column (``"column 'pos'"``), so
+        that a message names what the user sees.
+
+    Raises
+    ------
+    InputError
+        On a NaN or infinite value, fewer than `MIN_ROWS` rows, or a time that does not
+        increase strictly.
+    """
+    n = data["time_s"].size
+    for si, values in data.items():
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            i = int(bad[0])
+            raise where.fail(f"{where.row(i)}, {names[si]}: {float(values[i])!r} is not "
+                             "finite; expected a finite number")
+    if n < MIN_ROWS:
+        raise where.fail(f"{n} data rows; expected at least {MIN_ROWS}")
+    t = data["time_s"]
+    bad = np.flatnonzero(~(np.diff(t) > 0))
+    if bad.size:
+        i = int(bad[0]) + 1
+        raise where.fail(f"{where.row(i)}, {names['time_s']}: {float(t[i])!r} after "
+                         f"{float(t[i - 1])!r}; expected time to increase strictly")

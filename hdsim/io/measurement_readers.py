@@ -1,0 +1,285 @@
+"""Readers of measurement files: CSV and HDF5, by suffix or by content.
+
+Each reader turns one file into checked SI columns and the interpreted ``#`` keys
+(`Parsed`); `hdsim.io.measurement.load_measurement` builds the `Measurement` from
+them. The format is described in docs/measurements.md; the checks they share with
+arrays given in memory are in `hdsim.io.measurement_checks`. Reading never writes
+anything.
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+from hdsim.errors import InputError
+from hdsim.io.measurement_checks import (
+    MIN_ROWS,
+    TESTS,
+    Where,
+    check_values,
+    interpret_meta,
+    quote_cell,
+    resolve_columns,
+)
+
+__all__ = ["Parsed", "HDF5_SUFFIXES", "read_measurement_file", "read_csv", "read_hdf5"]
+
+#: File suffixes read and written as HDF5 (any other file is read as CSV unless it
+#: starts with the HDF5 signature).
+HDF5_SUFFIXES = (".h5", ".hdf5", ".hdf")
+
+_HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+
+
+class Parsed(NamedTuple):
+    """What a reader found in one file, checked.
+
+    Attributes
+    ----------
+    data : dict of str to numpy.ndarray
+        Canonical SI name (``'time_s'``, ``'angle_rad'``, ...) -> values in SI units
+        ([s], [N·m], [rad]).
+    test : str
+        ``'stiffness'`` or ``'kinematic_error'``.
+    ratio : float or None
+        Transmission ratio [-].
+    rated_torque : float or None
+        Rated torque [N·m].
+    meta : dict of str to str
+        Every ``#`` key (HDF5: attribute) as text.
+    """
+
+    data: dict
+    test: str
+    ratio: float | None
+    rated_torque: float | None
+    meta: dict
+
+
+def read_measurement_file(path: str | os.PathLike, columns: dict[str, str] | None) -> Parsed:
+    """Open a measurement file and read it as HDF5 or as CSV.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file. ``.h5``/``.hdf5``/``.hdf`` files, and any file starting with the HDF5
+        signature, are read as HDF5; everything else as CSV.
+    columns : dict of str to str or None
+        Column map, canonical name -> name in the file.
+
+    Returns
+    -------
+    Parsed
+        The checked columns and keys.
+
+    Raises
+    ------
+    InputError
+        On a missing or unreadable file, a column map that is not a dict, and every
+        refusal of `read_csv` and `read_hdf5`.
+    """
+    shown = str(path)
+    try:
+        with open(path, "rb") as handle:
+            head = handle.read(len(_HDF5_SIGNATURE))
+            is_hdf5 = head == _HDF5_SIGNATURE or Path(shown).suffix.lower() in HDF5_SUFFIXES
+            raw = head if is_hdf5 else head + handle.read()
+    except FileNotFoundError:
+        raise InputError(f"{shown}: no such file") from None
+    except IsADirectoryError:
+        raise InputError(f"{shown}: is a directory; expected a measurement file") from None
+    except OSError as exc:
+        raise InputError(f"{shown}: cannot read ({exc.strerror or exc})") from None
+    if columns is not None and not isinstance(columns, dict):
+        raise InputError(f"{shown}: the column map must be a dict canonical -> name in file")
+    if is_hdf5:
+        if not raw:
+            raise InputError(f"{shown}: the file is empty; expected an HDF5 file")
+        return read_hdf5(shown, columns)
+    return read_csv(shown, raw, columns)
+
+
+# --------------------------------------------------------------------------- CSV
+
+
+def read_csv(path: str, raw: bytes, columns: dict[str, str] | None) -> Parsed:
+    """Read the bytes of a CSV measurement file.
+
+    Parameters
+    ----------
+    path : str
+        The file, for messages.
+    raw : bytes
+        The whole file (UTF-8, a byte-order mark and Windows line ends allowed).
+    columns : dict of str to str or None
+        Column map, canonical name -> name in the file.
+
+    Returns
+    -------
+    Parsed
+        The checked columns and keys.
+
+    Raises
+    ------
+    InputError
+        Naming the line (1-based, counting ``#`` lines and the header) for: text that is
+        not UTF-8, an empty file, a malformed or repeated ``#`` line, a missing header,
+        a ``#`` line after the header, a row with the wrong number of cells, a cell
+        that is not a number, and every refusal of `hdsim.io.measurement_checks`.
+    """
+    where = Where(path)
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise where.fail(f"not a text CSV file (byte {exc.start + 1} is not UTF-8); expected "
+                         "'# key: value' lines, a header row and numbers") from None
+    lines = text.split("\n")
+    if not text.strip():
+        raise where.fail("the file is empty; expected '# test: ...', a header row and at "
+                         f"least {MIN_ROWS} rows of numbers")
+    meta: dict[str, str] = {}
+    origin: dict[str, str] = {}  # key -> 'line N: ' for messages
+    header_at = None
+    for number, line in enumerate(lines, start=1):
+        line = line.rstrip("\r")
+        stripped = line.strip()
+        if not stripped:
+            continue
+        if not stripped.startswith("#"):
+            header_at = number
+            break
+        body = stripped[1:].strip()
+        if not body:
+            continue  # a bare '#' spacer line
+        key, sep, value = body.partition(":")
+        key = key.strip()
+        if not sep or not key:
+            raise where.fail(f"line {number}: malformed '#' line {quote_cell(stripped, 40)}; "
+                             "expected '# key: value'")
+        if key in meta:
+            raise where.fail(f"line {number}: '# {key}:' given twice")
+        meta[key] = value.strip()
+        origin[key] = f"line {number}: "
+    if header_at is None:
+        raise where.fail("no header row; expected a header such as "
+                         "'time_s,torque_Nm,angle_rad' after the '#' lines")
+    test, ratio, rated = interpret_meta(meta, where, origin)
+    header = [h.strip() for h in next(csv.reader([lines[header_at - 1].rstrip("\r")]))]
+    index = resolve_columns(header, test, columns, where, "column")
+
+    rows: list[list[str]] = []
+    numbers: list[int] = []
+    for number in range(header_at + 1, len(lines) + 1):
+        line = lines[number - 1].rstrip("\r")
+        if not line.strip():
+            continue
+        if line.lstrip().startswith("#"):
+            raise where.fail(f"line {number}: '#' line after the header; expected '#' lines "
+                             "only before the header")
+        cells = line.split(",")
+        if len(cells) != len(header):
+            raise where.fail(f"line {number}: {len(cells)} cells; expected {len(header)} "
+                             f"({', '.join(header)})")
+        rows.append(cells)
+        numbers.append(number)
+    where = Where(path, lines=numbers)
+    if not rows:
+        raise where.fail(f"no data rows after the header; expected at least {MIN_ROWS}")
+    data = {si: _column_values(rows, i, header[i], where) * factor
+            for si, (i, factor) in index.items()}
+    check_values(data, where, {si: f"column '{header[i]}'" for si, (i, _) in index.items()})
+    return Parsed(data, test, ratio, rated, meta)
+
+
+def _column_values(rows: list[list[str]], i: int, name: str, where: Where) -> np.ndarray:
+    cells = [row[i] for row in rows]
+    try:
+        return np.array(cells, dtype=np.float64)
+    except ValueError:
+        pass
+    for r, cell in enumerate(cells):  # slow path only to name the first bad cell
+        try:
+            float(cell)
+        except ValueError:
+            raise where.fail(f"{where.row(r)}, column '{name}': {quote_cell(cell.strip())} is "
+                             "not a number; expected a number") from None
+    raise where.fail(f"column '{name}': cannot read the numbers")  # pragma: no cover
+
+
+# --------------------------------------------------------------------------- HDF5
+
+
+def _attr_text(value) -> str:
+    if isinstance(value, bytes):
+        return value.decode("utf-8", "replace")
+    if isinstance(value, np.ndarray) and value.size == 1:
+        value = value.reshape(-1)[0]
+    if isinstance(value, np.generic):
+        value = value.item()
+        if isinstance(value, bytes):
+            return value.decode("utf-8", "replace")
+    if isinstance(value, np.ndarray):
+        return " ".join(_attr_text(v) for v in value.reshape(-1))
+    return str(value)
+
+
+def read_hdf5(path: str, columns: dict[str, str] | None) -> Parsed:
+    """Read an HDF5 measurement file: one 1-D dataset per column, keys as attributes.
+
+    Parameters
+    ----------
+    path : str
+        The file.
+    columns : dict of str to str or None
+        Column map, canonical name -> dataset name in the file.
+
+    Returns
+    -------
+    Parsed
+        The checked columns and keys (every root attribute as text).
+
+    Raises
+    ------
+    InputError
+        Naming the dataset or row for: a file h5py cannot open, no dataset at the root,
+        a dataset that is not a 1-D column of numbers, datasets of unequal length, and
+        every refusal of `hdsim.io.measurement_checks`.
+    """
+    import h5py
+
+    where = Where(path)
+    try:
+        handle = h5py.File(path, "r")
+    except OSError as exc:
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise where.fail(f"cannot read as HDF5 ({reason}); expected an HDF5 file with one "
+                         "dataset per column") from None
+    with handle:
+        meta = {str(k): _attr_text(v) for k, v in handle.attrs.items()}
+        test, ratio, rated = interpret_meta(meta, where, {k: f"attribute '{k}': " for k in meta})
+        # Groups (e.g. provenance) are not columns; only root datasets are.
+        header = [name for name, item in handle.items() if isinstance(item, h5py.Dataset)]
+        if not header:
+            raise where.fail(f"no datasets at the file's root; a {test} file needs "
+                             f"{', '.join(TESTS[test])}")
+        index = resolve_columns(header, test, columns, where, "dataset")
+        data, length = {}, None
+        for si, (i, factor) in index.items():
+            name = header[i]
+            dset = handle[name]
+            if dset.ndim != 1:
+                raise where.fail(f"dataset '{name}' has shape {dset.shape}; expected a 1-D column")
+            if dset.dtype.kind not in "iuf":
+                raise where.fail(f"dataset '{name}' holds {dset.dtype} values; expected numbers")
+            if length is not None and dset.shape[0] != length[1]:
+                raise where.fail(f"dataset '{name}' has {dset.shape[0]} rows but "
+                                 f"'{length[0]}' has {length[1]}; expected equal lengths")
+            length = length or (name, dset.shape[0])
+            data[si] = np.asarray(dset[()], dtype=np.float64) * factor
+    check_values(data, where, {si: f"dataset '{header[i]}'" for si, (i, _) in index.items()})
+    return Parsed(data, test, ratio, rated, meta)

@@ -1,0 +1,142 @@
+"""The effect protocol: what every effect supplies to the simulator, the quasi-static
+evaluator and the fit.
+
+An effect is a frozen dataclass of parameters (`hdsim.model.parameters.param`
+fields) that belongs to one family (``hardening``, ``backlash``, ``friction``,
+``damping``, ``kinematic_error``) and carries its own behaviour: the family base
+classes (`hdsim.model.effects.hardening.Hardening` …) declare the methods the
+elastic path calls, with the "no effect" behaviour as default, so the code that
+assembles a model never asks which effect sits in a slot. Memory (friction states,
+the dead-zone closure) is ODE state named in ``state_names`` and passed in and out.
+
+For fits every effect also declares its free parameters with bounds and start
+values taken from the data (`FitContext`), how the fitted values map back onto
+its fields (`Effect.fit_updates`), the values at which it does nothing
+(`Effect.neutral`), and a placeholder instance for a model built from a family
+name (`Effect.placeholder`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from typing import ClassVar
+
+import numpy as np
+
+from hdsim.model.parameters import Parameters
+
+
+@dataclass(frozen=True)
+class FitContext:
+    """What the data say before any fit: the numbers effects draw start values from.
+
+    Attributes
+    ----------
+    stiffness : float
+        Secant stiffness of the loading branch [N·m/rad].
+    max_torque : float
+        Largest absolute torque of the record [N·m].
+    loop_width : float
+        Width of the loop at zero torque [rad].
+    step : float
+        Step of the twist across zero torque [rad].
+    rate : float
+        Median absolute loading rate [N·m/s].
+    linear_spring : bool
+        True when the model has no hardening (a parameter that acts only through the
+        tangent stiffness is then not identifiable).
+    """
+
+    stiffness: float
+    max_torque: float
+    loop_width: float = 0.0
+    step: float = 0.0
+    rate: float = 0.0
+    linear_spring: bool = True
+
+
+@dataclass(frozen=True)
+class FreeParameter:
+    """One parameter a fit frees: name, bounds of the search and a start value.
+
+    ``name`` is a field of the effect or an internal coordinate the effect maps onto
+    its fields in `Effect.fit_updates`. A finite ``upper`` gives a logistic transform,
+    an infinite one a logarithmic transform above ``lower``.
+    """
+
+    name: str
+    lower: float
+    upper: float
+    start: float
+
+
+class Effect(Parameters):
+    """Base of all effects: one family, the states its memory needs, the fit protocol."""
+
+    family: ClassVar[str] = ""
+    id: ClassVar[str] = ""
+    #: True for the explicit "no effect" of a family
+    is_null: ClassVar[bool] = False
+    state_names: ClassVar[tuple[str, ...]] = ()
+    #: unit of each state, "rad" or "N·m": sets the solver's absolute tolerance
+    state_unit: ClassVar[str] = "rad"
+
+    @property
+    def prefix(self) -> str:
+        return self.family
+
+    # ------------------------------------------------------------------ fit protocol
+    def free_parameters(self, context: FitContext) -> tuple[FreeParameter, ...]:
+        """The parameters a fit frees, with bounds and start values from ``context``.
+
+        Default: every numeric field within its physical bounds, started from the
+        effect's current value.
+        """
+        out = []
+        for name, meta in self.param_meta().items():
+            lower, upper = meta["bounds"]
+            start = float(np.asarray(getattr(self, name)).reshape(-1)[0])
+            out.append(FreeParameter(name, float(lower), float(upper), start))
+        return tuple(out)
+
+    def fit_updates(self, values: dict, engagement=None) -> dict:
+        """Dotted model updates ``{"family.field": value}`` from fitted ``values``.
+
+        ``engagement`` is the engagement ratio the base stiffness split chose (used by
+        hardening laws that fit a stiffness ratio); other effects ignore it.
+        """
+        return {f"{self.family}.{name}": value for name, value in values.items()}
+
+    def stiffness_ratio(self, values: dict):
+        """High-load over low-load stiffness this effect asks of the base split (1: none)."""
+        return 1.0
+
+    @classmethod
+    def neutral(cls) -> "Effect":
+        """An instance that acts exactly as "no effect" (used to stack models that
+        lack the family into one batch with models that have it)."""
+        raise NotImplementedError(f"{cls.family} effect '{cls.id}' declares no neutral values")
+
+    @classmethod
+    def placeholder(cls, rated_torque: float, stiffness: float) -> "Effect":
+        """An instance with plausible values for a drive of this rating and stiffness,
+        the starting structure of a fit that names only the family."""
+        raise NotImplementedError(f"{cls.family} effect '{cls.id}' has no placeholder values")
+
+    @classmethod
+    def stack(cls, effects: list["Effect"], sizes: list[int]) -> "Effect":
+        """One batch instance from several instances of this class (or "no effect",
+        replaced by `neutral`), ``sizes[i]`` rows each."""
+        columns = {name: [] for name in cls.param_meta()}
+        for effect, size in zip(effects, sizes):
+            source = effect if isinstance(effect, cls) else cls.neutral()
+            for name in columns:
+                value = np.asarray(getattr(source, name), dtype=float)
+                columns[name].append(np.broadcast_to(value, (size,)))
+        return cls.unchecked(**{name: np.concatenate(parts) for name, parts in columns.items()})
+
+    def describe(self) -> str:
+        """``family=id`` with the parameter values, for logs and reports."""
+        values = ", ".join(f"{f.name}={np.asarray(getattr(self, f.name)).reshape(-1)[0]:.4g}"
+                           for f in fields(self) if f.metadata)
+        return f"{self.family}={self.id}" + (f"({values})" if values else "")

@@ -1,0 +1,171 @@
+"""Hardening family: the spring law of the flexspline body, torque against twist.
+
+Every law starts from the base stiffness ``K₀ = 1/(C_struct + C_mesh)`` of the
+compliance chain and can only remove mesh-zone compliance as more teeth share the
+load (docs/physics.md, "hardening").
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from hdsim.model.effects.base import Effect, FitContext, FreeParameter
+from hdsim.model.parameters import param
+from hdsim.physics import stiffness as st
+
+
+class Hardening(Effect):
+    """Base of the hardening family; subclasses give ``torque`` and ``tangent``."""
+
+    family: ClassVar[str] = "hardening"
+
+    def torque(self, twist, c_struct, c_mesh):
+        """Spring torque [N·m] at body twist ``twist`` [rad]."""
+        raise NotImplementedError
+
+    def tangent(self, twist, c_struct, c_mesh):
+        """Tangent stiffness dT/dtwist [N·m/rad]."""
+        raise NotImplementedError
+
+    def spring_law(self, c_struct, c_mesh):
+        """A function ``twist -> (torque, tangent)`` with the law's arguments computed once."""
+        return lambda twist: (self.torque(twist, c_struct, c_mesh), self.tangent(twist, c_struct, c_mesh))
+
+
+@dataclass(frozen=True, eq=False)
+class NoHardening(Hardening):
+    """Linear stiffness: the base compliance alone, ``T = K₀ δ``."""
+
+    id: ClassVar[str] = "none"
+    is_null: ClassVar[bool] = True
+
+    def torque(self, twist, c_struct, c_mesh):
+        return twist / (c_struct + c_mesh)
+
+    def tangent(self, twist, c_struct, c_mesh):
+        return np.broadcast_to(1.0 / (c_struct + c_mesh), np.shape(twist))
+
+    def spring_law(self, c_struct, c_mesh):
+        k = 1.0 / (c_struct + c_mesh)
+        return lambda twist: (k * twist, k)
+
+    def free_parameters(self, context):
+        return ()
+
+    @classmethod
+    def neutral(cls):
+        return cls()
+
+
+@dataclass(frozen=True, eq=False)
+class ThreeSegmentHardening(Hardening):
+    """Catalog three-segment law; more teeth share the load above T1 and T2.
+
+    The mesh-zone compliance is divided by the engagement ratio ``e2`` between T1
+    and T2 and by ``e3`` above T2 (``e = 1`` below T1); the structural compliance is
+    unchanged. ``K_i = 1 / (C_struct + C_mesh / e_i)``.
+    """
+
+    id: ClassVar[str] = "three_segment"
+    T1: float = param("first breakpoint torque", "N·m", positive=True)
+    T2: float = param("second breakpoint torque", "N·m", positive=True)
+    e2: float = param("engagement ratio between T1 and T2", "-", 1.0, 100.0)
+    e3: float = param("engagement ratio above T2", "-", 1.0, 100.0)
+    #: knee rounding as a fraction of the twist at T1: small enough that the fitted
+    #: K1..K3 move by < 0.5 %, large enough that implicit solvers step over the knees
+    knee_rounding: ClassVar[float] = 0.03
+
+    def stiffnesses(self, c_struct, c_mesh):
+        """(K1, K2, K3) [N·m/rad] of the three segments."""
+        return (1.0 / (c_struct + c_mesh), 1.0 / (c_struct + c_mesh / self.e2),
+                1.0 / (c_struct + c_mesh / self.e3))
+
+    def _args(self, c_struct, c_mesh):
+        K = self.stiffnesses(c_struct, c_mesh)
+        return (self.T1, self.T2, *K, self.knee_rounding * self.T1 / K[0])
+
+    def torque(self, twist, c_struct, c_mesh):
+        return st.smooth_three_segment_torque(twist, *self._args(c_struct, c_mesh))
+
+    def tangent(self, twist, c_struct, c_mesh):
+        return st.smooth_three_segment_tangent(twist, *self._args(c_struct, c_mesh))
+
+    def spring_law(self, c_struct, c_mesh):
+        args = self._args(c_struct, c_mesh)
+        return lambda twist: (st.smooth_three_segment_torque(twist, *args),
+                              st.smooth_three_segment_tangent(twist, *args))
+
+    def free_parameters(self, context: FitContext):
+        t = context.max_torque
+        return (FreeParameter("T1", 0.0, np.inf, 0.15 * t), FreeParameter("T2", 0.0, np.inf, 0.5 * t),
+                FreeParameter("e2", 1.0, 100.0, 1.5), FreeParameter("e3", 1.0, 100.0, 2.5))
+
+    @classmethod
+    def neutral(cls):
+        return cls(T1=1.0, T2=2.0, e2=1.0, e3=1.0)
+
+    @classmethod
+    def placeholder(cls, rated_torque, stiffness):
+        return cls(T1=0.15 * rated_torque, T2=0.5 * rated_torque, e2=2.0, e3=3.0)
+
+
+@dataclass(frozen=True, eq=False)
+class TanhHardening(Hardening):
+    """Smooth hardening: tangent stiffness from K₀ to ``K∞ = 1/(C_struct + C_mesh/e_inf)``.
+
+    The transition is centred on the twist reached at ``T_s`` under K₀.
+
+    A fit frees it through two coordinates the data fix directly: the stiffness ratio
+    ``K∞/K₀`` (which the base stiffness split turns into ``e_inf``) and the curvature
+    ``(K∞/K₀ − 1)/T_s²`` [1/(N·m)²], which sets the tangent stiffness
+    ``K₀ (1 + curvature·T²)`` at small load.
+    """
+
+    id: ClassVar[str] = "tanh"
+    e_inf: float = param("engagement ratio at high load", "-", 1.0, 100.0)
+    T_s: float = param("transition torque", "N·m", positive=True)
+    #: range of K∞/K₀ a fit searches
+    ratio_bounds: ClassVar[tuple[float, float]] = (1.0, 40.0)
+
+    def _k(self, c_struct, c_mesh):
+        k0 = 1.0 / (c_struct + c_mesh)
+        return k0, 1.0 / (c_struct + c_mesh / self.e_inf), self.T_s / k0
+
+    def torque(self, twist, c_struct, c_mesh):
+        return st.tanh_hardening_torque(twist, *self._k(c_struct, c_mesh))
+
+    def tangent(self, twist, c_struct, c_mesh):
+        return st.tanh_hardening_tangent(twist, *self._k(c_struct, c_mesh))
+
+    def spring_law(self, c_struct, c_mesh):
+        args = self._k(c_struct, c_mesh)
+
+        def law(twist):
+            with np.errstate(over="ignore"):  # cosh overflow far out: the tangent is K∞
+                return st.tanh_hardening_torque(twist, *args), st.tanh_hardening_tangent(twist, *args)
+        return law
+
+    def free_parameters(self, context: FitContext):
+        return (FreeParameter("curvature", 0.0, np.inf, 3.0 / (0.6 * context.max_torque) ** 2),
+                FreeParameter("K_ratio", *self.ratio_bounds, 4.0))
+
+    def stiffness_ratio(self, values):
+        return values["K_ratio"]
+
+    def fit_updates(self, values, engagement=None):
+        excess = np.maximum(np.asarray(values["K_ratio"], dtype=float) - 1.0, 1e-9)
+        curvature = np.maximum(np.asarray(values["curvature"], dtype=float), 1e-300)
+        # a ratio pinned at 1 or a curvature at 0 mean "no hardening": T_s far out, finite
+        T_s = np.minimum(np.sqrt(excess / curvature), 1e12)
+        return {"hardening.e_inf": engagement, "hardening.T_s": T_s}
+
+    @classmethod
+    def neutral(cls):
+        return cls(e_inf=1.0, T_s=1.0)
+
+    @classmethod
+    def placeholder(cls, rated_torque, stiffness):
+        return cls(e_inf=2.0, T_s=0.3 * rated_torque)

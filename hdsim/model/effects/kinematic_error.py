@@ -1,0 +1,148 @@
+"""Kinematic-error family: a position-periodic displacement source in the mesh."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import ClassVar
+
+import numpy as np
+
+from hdsim.model.effects.base import Effect
+from hdsim.model.parameters import param
+from hdsim.physics import kinematic_error as ke
+
+
+class KinematicError(Effect):
+    """Base of the kinematic-error family: ``e(θ_w, θ_o, f)`` [rad], ``f = T/T_N``."""
+
+    family: ClassVar[str] = "kinematic_error"
+    #: step of the central differences of the default partial derivatives [rad] and [-]
+    difference_step: ClassVar[float] = 1e-6
+
+    def displacement(self, wg_angle, output_angle, load_fraction):
+        """Kinematic error [rad] at WG angle, output angle [rad] and load ``T/T_N`` [-]."""
+        return 0.0
+
+    def displacement_and_partials(self, wg_angle, output_angle, load_fraction):
+        """``(e, ∂e/∂θ_w, ∂e/∂θ_o, ∂e/∂f)``; central differences unless a law has them in closed form."""
+        f, h = self.displacement, self.difference_step
+        return (f(wg_angle, output_angle, load_fraction),
+                (f(wg_angle + h, output_angle, load_fraction) - f(wg_angle - h, output_angle, load_fraction)) / (2 * h),
+                (f(wg_angle, output_angle + h, load_fraction) - f(wg_angle, output_angle - h, load_fraction)) / (2 * h),
+                (f(wg_angle, output_angle, load_fraction + h) - f(wg_angle, output_angle, load_fraction - h)) / (2 * h))
+
+    def linear_basis(self, wg_angle, output_angle):
+        """Columns the error is linear in (solved by least squares in a fit), or None."""
+        return None
+
+    def from_linear(self, coefficients) -> tuple["KinematicError", dict]:
+        """The effect (and its parameter values) for least-squares ``coefficients`` of `linear_basis`."""
+        raise NotImplementedError
+
+
+@dataclass(frozen=True, eq=False)
+class NoKinematicError(KinematicError):
+    """Perfect kinematics: θ_out = θ_WG / N."""
+
+    id: ClassVar[str] = "none"
+    is_null: ClassVar[bool] = True
+
+    def displacement_and_partials(self, wg_angle, output_angle, load_fraction):
+        return 0.0, 0.0, 0.0, 0.0
+
+    def free_parameters(self, context):
+        return ()
+
+    @classmethod
+    def neutral(cls):
+        return cls()
+
+
+def _per_sample(value):
+    """A float for a single value (the solver's scalar path is faster on floats), else the
+    per-sample array (M,), which broadcasts against angles of shape (M,) or (nt, M)."""
+    value = np.asarray(value, dtype=float)
+    return float(value) if value.size == 1 else value
+
+
+@dataclass(frozen=True, eq=False)
+class FourierKinematicError(KinematicError):
+    """Kinematic error harmonics at 1×, 2×, 4× the wave-generator angle and 1× output.
+
+    Amplitudes scale with ``1 + load_gain·|T|/T_N`` (Ghorbel et al., 2001, observed
+    KE varying with load). In a fit the amplitudes and phases enter as sine/cosine
+    coefficients solved by linear least squares; ``load_gain`` stays at 0.
+    """
+
+    id: ClassVar[str] = "fourier"
+    a1: float = param("1× WG amplitude", "rad", 0.0, 0.01)
+    a2: float = param("2× WG amplitude", "rad", 0.0, 0.01)
+    a4: float = param("4× WG amplitude", "rad", 0.0, 0.01)
+    p1: float = param("1× WG phase", "rad", -10.0, 10.0)
+    p2: float = param("2× WG phase", "rad", -10.0, 10.0)
+    p4: float = param("4× WG phase", "rad", -10.0, 10.0)
+    a_out: float = param("1× output amplitude (eccentricity)", "rad", 0.0, 0.01)
+    p_out: float = param("1× output phase", "rad", -10.0, 10.0)
+    load_gain: float = param("relative amplitude change at rated torque", "-", -1.0, 10.0)
+    wg_orders: ClassVar[tuple[int, ...]] = (1, 2, 4)
+    output_orders: ClassVar[tuple[int, ...]] = (1,)
+
+    @cached_property
+    def _harmonics(self):
+        """(WG terms, output terms, load gain) with per-sample values, computed once."""
+        f = _per_sample
+        wg = tuple((k, f(a), f(p)) for k, a, p in ((1.0, self.a1, self.p1), (2.0, self.a2, self.p2),
+                                                     (4.0, self.a4, self.p4)))
+        return wg, ((1.0, f(self.a_out), f(self.p_out)),), f(self.load_gain)
+
+    def displacement(self, wg_angle, output_angle, load_fraction):
+        scale = 1.0 + self.load_gain * np.abs(load_fraction)
+        return scale * ke.fourier_kinematic_error(
+            wg_angle, output_angle, (1, 2, 4), (self.a1, self.a2, self.a4), (self.p1, self.p2, self.p4),
+            (1,), (self.a_out,), (self.p_out,))
+
+    def displacement_and_partials(self, wg_angle, output_angle, load_fraction):
+        wg, out, gain = self._harmonics
+        base = d_w = d_o = 0.0
+        for k, a, p in wg:
+            arg = k * wg_angle + p
+            base = base + a * np.sin(arg)
+            d_w = d_w + a * k * np.cos(arg)
+        for k, a, p in out:
+            arg = k * output_angle + p
+            base = base + a * np.sin(arg)
+            d_o = d_o + a * k * np.cos(arg)
+        scale = 1.0 + gain * np.abs(load_fraction)
+        return scale * base, scale * d_w, scale * d_o, gain * np.sign(load_fraction) * base
+
+    def linear_basis(self, wg_angle, output_angle):
+        columns = []
+        for k in self.wg_orders:
+            columns += [np.sin(k * wg_angle), np.cos(k * wg_angle)]
+        for k in self.output_orders:
+            columns += [np.sin(k * output_angle), np.cos(k * output_angle)]
+        return np.column_stack(columns)
+
+    def from_linear(self, coefficients):
+        pairs = np.asarray(coefficients, dtype=float).reshape(-1, 2)
+        amplitudes, phases = np.hypot(pairs[:, 0], pairs[:, 1]), np.arctan2(pairs[:, 1], pairs[:, 0])
+        amp_names = [f"a{k}" for k in self.wg_orders] + ["a_out"]
+        phase_names = [f"p{k}" for k in self.wg_orders] + ["p_out"]
+        upper = self.param_meta()["a1"]["bounds"][1]
+        values = {"load_gain": 0.0}
+        for a, p, an, pn in zip(amplitudes, phases, amp_names, phase_names):
+            values[an] = float(min(a, upper))
+            values[pn] = float(p)
+        return type(self)(**values), values
+
+    def free_parameters(self, context):
+        return ()  # all linear: see linear_basis
+
+    @classmethod
+    def neutral(cls):
+        return cls(a1=0.0, a2=0.0, a4=0.0, p1=0.0, p2=0.0, p4=0.0, a_out=0.0, p_out=0.0, load_gain=0.0)
+
+    @classmethod
+    def placeholder(cls, rated_torque, stiffness):
+        return cls.neutral()

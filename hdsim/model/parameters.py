@@ -1,0 +1,91 @@
+"""Parameter holders: numeric fields with a unit, physical bounds and a one-line meaning.
+
+Every numeric parameter of the model (effects, wave generator, drive data,
+calibration) is a dataclass field made by `param`. The metadata drives bound
+checks on construction, the dotted parameter listing of `HarmonicDrive.params`,
+the fit's parameter transforms and the messages a user sees.
+"""
+
+from __future__ import annotations
+
+from dataclasses import MISSING, field, fields
+from typing import ClassVar
+
+import numpy as np
+
+from hdsim.errors import InputError
+
+
+def param(doc: str, unit: str, lower: float = 0.0, upper: float = np.inf, positive: bool = False,
+          default=MISSING):
+    """A numeric parameter field with its unit and physical bounds.
+
+    Parameters
+    ----------
+    doc : str
+        One-line meaning, shown in messages and the API pages.
+    unit : str
+        Unit symbol, e.g. ``"N·m"``.
+    lower, upper : float
+        Closed physical bounds.
+    positive : bool
+        Zero is excluded as well (``lower`` is then only the display bound).
+    default : float, optional
+        Makes the parameter optional in scenario and fitted-model files.
+    """
+    return field(default=default,
+                 metadata={"doc": doc, "unit": unit, "bounds": (lower, upper), "positive": positive})
+
+
+def _as_float_array(owner: str, name: str, value) -> np.ndarray:
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{owner}.{name} must be a number, got {value!r}") from None
+    if array.ndim > 1:
+        raise InputError(f"{owner}.{name} must be a number or a 1-D array, got shape {array.shape}")
+    return array
+
+
+class Parameters:
+    """Base of every parameter holder: bound checks on construction, field listing.
+
+    Subclasses are frozen dataclasses; a field may hold a float or a 1-D array (a batch
+    of parameter sets evaluated at once).
+    """
+
+    #: dotted-name prefix used in messages (``drive``, ``wave_generator`` …)
+    prefix: ClassVar[str] = ""
+
+    def __post_init__(self):
+        for f in fields(self):
+            if not f.metadata:
+                continue
+            value = _as_float_array(self.prefix, f.name, getattr(self, f.name))
+            lower, upper = f.metadata["bounds"]
+            bad = ~np.isfinite(value) | (value < lower) | (value > upper)
+            bound = f"[{lower:g}, {upper:g}]"
+            if f.metadata["positive"]:
+                bad |= value <= 0.0
+                bound = f"({lower:g}, {upper:g}]" if lower <= 0.0 else bound
+            if np.any(bad):
+                first = np.atleast_1d(value)[np.argmax(np.atleast_1d(bad))]
+                raise InputError(f"{self.prefix}.{f.name} = {first:g} is outside {bound} {f.metadata['unit']}")
+
+    def params(self) -> dict:
+        """Every numeric field by name."""
+        return {f.name: getattr(self, f.name) for f in fields(self) if f.metadata}
+
+    @classmethod
+    def param_meta(cls) -> dict:
+        """Metadata (``doc``, ``unit``, ``bounds``, ``positive``) of every numeric field."""
+        return {f.name: dict(f.metadata) for f in fields(cls) if f.metadata}
+
+    @classmethod
+    def unchecked(cls, **values):
+        """An instance without bound checks, for neutral parameter values that lie on or
+        beyond a physical bound (a zero stiffness that switches a law off)."""
+        obj = object.__new__(cls)
+        for name, value in values.items():
+            object.__setattr__(obj, name, value)
+        return obj

@@ -1,0 +1,234 @@
+"""The driven-wave-generator bench (set-up ``driven_wave_generator``): scenario → bench → run.
+
+A driven scenario's tables (`hdsim.scenarios.driven_schema`, every key in
+docs/tutorial-kinematic-error.md) become a `hdsim.simulation.driven.Bench`: WG motion,
+load, speed loop, WG-shaft friction and output sampling, in SI. The runner integrates
+it in segments (`hdsim.simulation.solver.step_schedule`) and computes the metric groups
+the scenario lists (`hdsim.scenarios.driven_metrics`). Switches are the strings
+``"yes"`` and ``"no"``; rpm, degrees and arcsec appear only in the scenario tables
+and in metric names.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from hdsim.errors import InputError, unknown_name
+from hdsim.model.drive import HarmonicDrive
+from hdsim.model.input_friction import for_unit
+from hdsim.scenarios.driven_metrics import DRIVEN_METRICS, driven_metrics
+from hdsim.scenarios.driven_schema import DRIVEN_REQUIRED, DRIVEN_SCHEMA
+from hdsim.scenarios.profile_csv import read_profile_csv
+from hdsim.scenarios.setups import Setup
+from hdsim.simulation.controller import PIController
+from hdsim.simulation.driven import SETUP, Bench, scalar_ratio
+from hdsim.simulation.loads import NO_LOAD, csv_load, opposing_load, ramped_load, step_load, sweep_load
+from hdsim.simulation.motion import (constant_speed_motion, csv_motion, hold_motion, reversal_motion, sine_motion,
+                                     trapezoid_motion)
+from hdsim.simulation.solver import SolverOptions, integrate_segments, step_schedule
+from hdsim.units import rpm_to_rad_per_s
+
+TWO_PI = 2.0 * np.pi
+
+_PROFILES = ("hold", "constant", "reversal", "trapezoid", "sine", "csv")
+_LOADS = ("none", "constant", "opposing", "step", "sweep", "csv")
+
+
+def _positive(table, key, default, where, allow_zero=False):
+    value = float(table.get(key, default))
+    if not np.isfinite(value) or value < 0.0 or (value == 0.0 and not allow_zero):
+        raise InputError(f"{where}: {key} must be {'>= 0' if allow_zero else '> 0'}, got {value:g}")
+    return value
+
+
+def _yes(value, key, where) -> bool:
+    if value not in ("yes", "no"):
+        raise InputError(f"{where}: {key} must be \"yes\" or \"no\", got {value!r}")
+    return value == "yes"
+
+
+def bench_from_scenario(model: HarmonicDrive, scenario) -> Bench:
+    """Read a driven scenario's tables into motion, load, controller and friction, in SI.
+
+    Parameters
+    ----------
+    model : HarmonicDrive
+        A single or batch model (one transmission ratio for the batch).
+    scenario : hdsim.scenarios.scenario.Scenario
+        A ``driven_wave_generator`` scenario; an ``input.csv`` path is relative to its file.
+
+    Returns
+    -------
+    Bench
+        The bench, its motion's windows holding the load's windows too.
+
+    Raises
+    ------
+    InputError
+        On an unknown metric, mode or profile, a value out of range, or a bad profile file.
+    """
+    src = scenario.source
+    data = scenario.data
+    for name in scenario.metrics:
+        if name not in DRIVEN_METRICS:
+            raise unknown_name(f"metric in scenario {scenario.name}", name, DRIVEN_METRICS)
+    N = scalar_ratio(model)
+    TN = np.asarray(model.drive.rated_torque, dtype=float)
+    inp, ld = data.get("input", {}), data.get("load", {})
+    mode = inp["mode"]
+    if mode not in ("prescribed", "pi"):
+        raise unknown_name(f"input.mode in {src}", mode, ("prescribed", "pi"))
+    profile = inp["profile"]
+    if profile not in _PROFILES:
+        raise unknown_name(f"input.profile in {src}", profile, _PROFILES)
+    load_kind = ld.get("profile", "none")
+    if load_kind not in _LOADS:
+        raise unknown_name(f"load.profile in {src}", load_kind, _LOADS)
+
+    csv_data = None
+    if profile == "csv" or load_kind == "csv":
+        if "csv" not in inp:
+            raise InputError(f"{src}: input.csv (the measured profile file) is required for a csv profile")
+        csv_path = Path(inp["csv"])
+        if not csv_path.is_absolute() and src != "<dict>":
+            csv_path = Path(src).resolve().parent / csv_path
+        csv_data = read_profile_csv(csv_path)
+        if load_kind == "csv" and "torque" not in csv_data:
+            raise InputError(f"{csv_path}: load.profile = \"csv\" needs a torque_Nm column")
+
+    # ---------------------------------------------------------------- motion
+    speed = rpm_to_rad_per_s(float(inp.get("speed_rpm", 0.0)))
+    ramp = _positive(inp, "ramp_s", 0.2, src)
+    if profile in ("constant", "reversal", "trapezoid") and speed == 0.0:
+        raise InputError(f"{src}: input.speed_rpm must be non-zero for a {profile} profile")
+    if profile == "constant":
+        motion = constant_speed_motion(speed, N, ramp, _positive(inp, "output_revolutions", 1.0, src),
+                                       _positive(inp, "settle_revolutions", 0.05, src, allow_zero=True))
+    elif profile == "reversal":
+        motion = reversal_motion(speed, N, ramp, _positive(inp, "output_revolutions", 1.0, src),
+                                 _positive(inp, "settle_revolutions", 0.05, src, allow_zero=True),
+                                 _positive(inp, "dwell_s", 0.1, src, allow_zero=True))
+    elif profile == "trapezoid":
+        back = _yes(inp.get("return", "yes"), "input.return", src)
+        move = np.deg2rad(float(inp.get("move_deg", 90.0)))
+        if move == 0.0:
+            raise InputError(f"{src}: input.move_deg must be non-zero")
+        motion = trapezoid_motion(speed, N, move, ramp, _positive(inp, "dwell_s", 0.2, src), back)
+    elif profile == "sine":
+        motion = sine_motion(np.deg2rad(_positive(inp, "amplitude_deg", 1.0, src)) * N,
+                             _positive(inp, "frequency_Hz", 1.0, src), _positive(inp, "cycles", 3.0, src),
+                             _positive(inp, "dwell_s", 0.0, src, allow_zero=True))
+    elif profile == "csv":
+        motion = csv_motion(csv_data)
+    else:
+        motion = hold_motion(_positive(inp, "hold_s", 0.5, src))
+
+    # ---------------------------------------------------------------- load
+    torque = float(ld.get("torque", 0.0))
+    if abs(torque) > 5.0:
+        raise InputError(f"{src}: load.torque is a fraction of T_N and must be within ±5")
+    load_ramp = _positive(ld, "ramp_s", 0.05, src)
+    if load_kind == "none":
+        load = NO_LOAD
+    elif load_kind == "constant":
+        load = ramped_load(torque * TN, load_ramp)
+    elif load_kind == "opposing":
+        cruise = motion.max_speed
+        if cruise == 0.0:
+            raise InputError(f"{src}: an opposing load needs a moving input profile")
+        load = opposing_load(abs(torque) * TN, motion, _positive(ld, "smoothing", 0.05, src) * cruise)
+    elif load_kind == "step":
+        step_time = _positive(ld, "step_time_s", 0.2, src)
+        load = step_load(torque * TN, float(ld.get("step_to", 0.5)) * TN, load_ramp, step_time,
+                         _positive(ld, "rise_s", 0.002, src))
+        if step_time <= load_ramp:
+            raise InputError(f"{src}: load.step_time_s must come after the load ramp (load.ramp_s)")
+    elif load_kind == "sweep":
+        f0, f1 = _positive(ld, "f_start_Hz", 20.0, src), _positive(ld, "f_stop_Hz", 1500.0, src)
+        if f1 <= f0:
+            raise InputError(f"{src}: load.f_stop_Hz must exceed load.f_start_Hz")
+        load = sweep_load(torque * TN, _positive(ld, "sweep_amplitude", 0.01, src) * TN, f0, f1, load_ramp,
+                          _positive(ld, "settle_s", 0.1, src), _positive(ld, "sweep_s", 1.0, src),
+                          _positive(ld, "tail_s", 0.2, src))
+        t_s, t_e = load.windows["sweep"][0], load.t_end
+        sweep_s = float(ld.get("sweep_s", 1.0))
+        octaves = max(int(np.ceil(np.log2(f1 / f0))), 1)
+        edges = t_s + sweep_s * np.arange(octaves + 1) / octaves
+        schedule = [(0.0, t_s, 1.0 / load_ramp)]
+        schedule += [(a, b, f0 * (f1 / f0) ** ((b - t_s) / sweep_s)) for a, b in zip(edges[:-1], edges[1:])]
+        schedule.append((t_s + sweep_s, t_e, f1))
+        load = replace(load, operating_point=torque, sweep_start=f0, frequency_schedule=schedule)
+    else:
+        load = csv_load(csv_data)
+    load_inertia = _positive(ld, "inertia", 0.0, src, allow_zero=True)
+
+    # ---------------------------------------------------------------- controller, friction
+    controller = None
+    ctl = data.get("controller", {})
+    if mode == "pi":
+        J_total = float(np.max(model.drive.J_in)) + (float(np.max(model.drive.J_out)) + load_inertia) / N**2
+        base = PIController.tuned(J_total, _positive(ctl, "bandwidth_Hz", 30.0, src),
+                                  _yes(ctl.get("feedforward", "yes"), "controller.feedforward", src),
+                                  _yes(ctl.get("position_loop", "no"), "controller.position_loop", src))
+        controller = PIController(kp=_positive(ctl, "kp", base.kp, src), ki=_positive(ctl, "ki", base.ki, src,
+                                                                                      allow_zero=True),
+                                  feedforward_inertia=base.feedforward_inertia,
+                                  position_gain=_positive(ctl, "position_gain_per_s", base.position_gain, src,
+                                                          allow_zero=True))
+    elif ctl:
+        raise InputError(f"{src}: [controller] applies to input.mode = \"pi\" only")
+    friction = for_unit(model, data.get("input_friction"))
+
+    t_end = max(motion.t_end, load.t_end)
+    if load_kind == "step" and step_time >= t_end:
+        raise InputError(f"{src}: load.step_time_s ({step_time:g} s) must come before the end of the "
+                         f"input profile ({t_end:g} s)")
+    if profile == "hold" and load.t_end and "hold_s" not in inp:
+        motion = hold_motion(t_end)
+    windows = {**motion.windows, **{k: (a, min(b, t_end)) for k, (a, b) in load.windows.items()}}
+    motion = replace(motion, windows=windows)
+    out = data.get("output", {})
+    per_rev = int(out.get("samples_per_wg_rev", 64))
+    rate = max(_positive(out, "sample_rate_Hz", 1000.0, src), per_rev * motion.max_speed / TWO_PI)
+    return Bench(motion, load, mode, controller, friction, load_inertia, t_end, rate, scenario.metrics)
+
+
+def run_driven(model: HarmonicDrive, scenario, *, samples_per_segment: int | None = None,
+               options: SolverOptions | None = None):
+    """Run a driven scenario (the runner of `DRIVEN`).
+
+    Parameters
+    ----------
+    model : HarmonicDrive
+        A single or batch model.
+    scenario : hdsim.scenarios.scenario.Scenario
+        A ``driven_wave_generator`` scenario.
+    samples_per_segment : int, optional
+        Overrides ``output.samples_per_wg_rev`` (the returned scenario carries it).
+    options : SolverOptions, optional
+        Solver options (the scenario's ``[solver]`` table applied); without ``max_step``
+        the step is bounded per segment by `hdsim.simulation.solver.step_schedule`.
+
+    Returns
+    -------
+    tuple
+        (scenario as run, `hdsim.simulation.solver.SimulationResult` whose metadata holds
+        the ``windows``, ``input_mode`` and ``profile``, metrics ``{name: (M,)}``).
+    """
+    if samples_per_segment:
+        scenario = scenario.with_updates({"output.samples_per_wg_rev": int(samples_per_segment)})
+    bench = bench_from_scenario(model, scenario)
+    system = bench.system(model)
+    t_eval = bench.sample_times()
+    result = integrate_segments(system, step_schedule(bench, options or SolverOptions()), t_eval)
+    result.metadata.update(windows={k: [float(a), float(b)] for k, (a, b) in bench.motion.windows.items()},
+                           input_mode=bench.mode, profile=bench.motion.description)
+    metrics = driven_metrics(model, scenario, bench, result)
+    return scenario, result, metrics
+
+
+DRIVEN = Setup(name=SETUP, schema=DRIVEN_SCHEMA, required=DRIVEN_REQUIRED, runner=run_driven,
+               metrics=DRIVEN_METRICS)

@@ -1,0 +1,99 @@
+"""The locked-wave-generator bench (set-up ``locked_wave_generator``): stiffness and lost-motion tests.
+
+The WG is held and a torque cycle 0 → +A → −A → … → 0 is applied to the output
+(`hdsim.scenarios.scenario.Scenario.levels`, cosine ramps at a mean rate); the metrics
+are read from the torque–twist loop (`hdsim.scenarios.locked_metrics`, docs/physics.md,
+"Test definitions").
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hdsim.errors import InputError
+from hdsim.model.drive import HarmonicDrive
+from hdsim.scenarios.locked_metrics import METRIC_GROUPS, locked_metrics
+from hdsim.scenarios.setups import Setup
+from hdsim.simulation.path import locked_wave_generator
+from hdsim.simulation.solver import SolverOptions, integrate
+
+#: the scenario tables of this bench: the torque cycle, in fractions of the rated torque T_N
+SCHEMA = {"load": {"amplitude": float, "cycles": int, "rate": float}}
+REQUIRED = {"load": ("amplitude", "cycles", "rate")}
+
+
+def check(data: dict, source: str) -> None:
+    """Refuse a torque cycle out of range.
+
+    Parameters
+    ----------
+    data : dict
+        The scenario table, types already checked.
+    source : str
+        Where it came from, for the message.
+
+    Raises
+    ------
+    InputError
+        Amplitude outside (0, 5] × T_N, fewer than one cycle or a rate not above 0.
+    """
+    load = data["load"]
+    if not 0.0 < load["amplitude"] <= 5.0:
+        raise InputError(f"{source}: load.amplitude must be in (0, 5] (fraction of T_N)")
+    if load["cycles"] < 1 or load["rate"] <= 0:
+        raise InputError(f"{source}: load.cycles must be >= 1 and load.rate > 0")
+
+
+def breakpoints(model: HarmonicDrive):
+    """The breakpoints (T1, T2) [N·m] of the unit's three-segment stiffness law.
+
+    Catalog values if the model is a catalog unit, else the hardening law's.
+
+    Raises
+    ------
+    InputError
+        If neither is known.
+    """
+    catalog = model.provenance.get("catalog")
+    if catalog:
+        return catalog["T1"], catalog["T2"]
+    hardening = model.hardening
+    if hasattr(hardening, "T1"):
+        return hardening.T1, hardening.T2
+    raise InputError("stiffness metrics need breakpoints T1, T2: use a catalog unit or "
+                     "a three_segment hardening effect")
+
+
+def run_locked(model: HarmonicDrive, scenario, *, samples_per_segment: int | None = None,
+               options: SolverOptions | None = None):
+    """Run a locked-WG scenario (the runner of `LOCKED`).
+
+    Parameters
+    ----------
+    model : HarmonicDrive
+        A single or batch model.
+    scenario : hdsim.scenarios.scenario.Scenario
+        A ``locked_wave_generator`` scenario.
+    samples_per_segment : int, optional
+        Output samples per ramp; overrides ``output.samples_per_segment``.
+    options : SolverOptions, optional
+        Solver options (the scenario's ``[solver]`` table applied).
+
+    Returns
+    -------
+    tuple
+        (scenario, `hdsim.simulation.solver.SimulationResult`, metrics ``{name: (M,)}``).
+    """
+    n = samples_per_segment or scenario.samples_per_segment
+    rated = model.drive.rated_torque
+    system = locked_wave_generator(model, scenario.torque_profile(rated))
+    t_eval = scenario.sample_times(n)
+    result = integrate(system, (t_eval[0], t_eval[-1]), t_eval, options)
+    T1, T2 = breakpoints(model) if "stiffness" in scenario.metrics else (np.nan, np.nan)
+    metrics = locked_metrics(scenario.metrics, result.signals["torque_Nm"], result.signals["twist_rad"],
+                             scenario.levels(), n, T1, T2, rated)
+    return scenario, result, metrics
+
+
+LOCKED = Setup(name="locked_wave_generator", schema=SCHEMA, required=REQUIRED, runner=run_locked,
+               metrics=METRIC_GROUPS, check=check)

@@ -1,0 +1,153 @@
+"""The run file (HDF5): time series, metrics, the full parameter set and provenance.
+
+Layout of a run file (one run, or a batch of ``M`` runs)::
+
+    /                attrs: hdsim_version, unit, scenario, setup, created
+    /t               [s]
+    /states/NAME     (M, nt)
+    /signals/NAME    (M, nt)      torque_Nm, twist_rad, ...
+    /metrics/NAME    (M,)         in the units their names carry
+    /params/NAME     (M,) or ()   dotted parameter names, SI
+    /effects         attrs: family -> effect id
+    /scenario        attrs: toml (the scenario table as TOML text)
+    /solver          attrs: method, rtol, nfev, ...
+
+Written atomically (a temporary file, then a rename). `hdsim.scenarios.run.Run.save`
+writes one and `hdsim.scenarios.run.read_run` reads it back into a `Run`; the model is
+rebuilt from the built-in unit of that name with every stored parameter and effect
+applied (docs/tutorial-first-simulation.md).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import tomllib
+from pathlib import Path
+
+import h5py
+import numpy as np
+import tomli_w
+
+from hdsim import __version__
+from hdsim.atomic import atomic_path
+from hdsim.errors import InputError
+from hdsim.model.catalog import load_unit
+from hdsim.model.drive import HarmonicDrive
+from hdsim.model.effects import make_effect
+from hdsim.scenarios.scenario import Scenario
+from hdsim.simulation.solver import SimulationResult
+
+
+def write_run_file(path, run) -> Path:
+    """Write a run to an HDF5 run file atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Target file (layout in the module description); replaced if it exists.
+    run : hdsim.scenarios.run.Run
+        A finished run (one model or a batch).
+
+    Returns
+    -------
+    pathlib.Path
+        The written file.
+    """
+    path = Path(path)
+    result = run.result
+    with atomic_path(path) as tmp:
+        with h5py.File(tmp, "w") as f:
+            f.attrs.update(hdsim_version=__version__, unit=run.model.name, scenario=run.scenario.name,
+                           setup=result.setup,
+                           created=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"))
+            f.create_dataset("t", data=result.t).attrs["unit"] = "s"
+            for group, table in (("states", result.states), ("signals", result.signals)):
+                g = f.create_group(group)
+                for name, values in table.items():
+                    g.create_dataset(name, data=np.asarray(values), compression="gzip", compression_opts=4)
+            g = f.create_group("metrics")
+            for name, values in run.metrics.items():
+                g.create_dataset(name, data=np.asarray(values, dtype=float))
+            g = f.create_group("params")
+            for name, value in run.model.params().items():
+                g.create_dataset(name, data=np.asarray(value, dtype=float))
+            f.create_group("effects").attrs.update({s: e.id for s, e in run.model.effects().items()})
+            f.create_group("scenario").attrs["toml"] = tomli_w.dumps(run.scenario.data)
+            f.create_group("solver").attrs.update({k: v for k, v in result.solver.items()})
+    return path
+
+
+def read_run_file(path) -> tuple[HarmonicDrive, Scenario, SimulationResult, dict]:
+    """Read a file written by `write_run_file`.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The run file.
+
+    Returns
+    -------
+    tuple
+        (model, scenario, result, metrics): the model rebuilt from the built-in unit
+        with the stored parameters and effects, the scenario (its ``source`` is the
+        file), the result (times [s], states, signals, solver statistics; ``metadata``
+        holds the file's ``unit``, ``scenario``, ``hdsim_version`` and ``created``) and
+        the metrics ``{name: (M,)}``.
+
+    Raises
+    ------
+    InputError
+        If the file cannot be opened as HDF5, lacks a part of the layout, or names a
+        unit or an effect that is not known.
+    """
+    path = Path(path)
+    try:
+        f = h5py.File(path, "r")
+    except (OSError, FileNotFoundError) as exc:
+        raise InputError(f"{path}: not a readable hdsim result ({exc})") from None
+    with f:
+        try:
+            states = {k: v[()] for k, v in f["states"].items()}
+            signals = {k: v[()] for k, v in f["signals"].items()}
+            metrics = {k: v[()] for k, v in f["metrics"].items()}
+            params = {k: v[()] for k, v in f["params"].items()}
+            attrs = dict(f.attrs)
+            result = SimulationResult(t=f["t"][()], states=states, signals=signals, setup=str(attrs["setup"]),
+                                      solver=dict(f["solver"].attrs),
+                                      metadata={k: attrs[k] for k in ("unit", "scenario", "hdsim_version",
+                                                                      "created") if k in attrs})
+            effects = {k: str(v) for k, v in f["effects"].attrs.items()}
+            scenario_toml = str(f["scenario"].attrs["toml"])
+            unit = str(attrs["unit"])
+        except KeyError as exc:
+            raise InputError(f"{path}: not an hdsim result file (missing {exc})") from None
+    model = stored_model(unit, params, effects)
+    scenario = Scenario(tomllib.loads(scenario_toml), str(path))
+    return model, scenario, result, metrics
+
+
+def stored_model(unit: str, params: dict, effects: dict) -> HarmonicDrive:
+    """A model from what a run file stores.
+
+    Parameters
+    ----------
+    unit : str
+        Name of a built-in unit (`hdsim.model.catalog.unit_names`).
+    params : dict
+        Dotted parameter name → value (SI), scalars or arrays of shape (M,).
+    effects : dict
+        Slot → effect id.
+
+    Returns
+    -------
+    HarmonicDrive
+        The unit with each slot's effect built from its stored parameters
+        (`hdsim.model.effects.make_effect`) and every other parameter applied.
+    """
+    values = {name: float(v) if np.ndim(v) == 0 else np.asarray(v, dtype=float) for name, v in params.items()}
+    slots = {}
+    for family, effect_id in effects.items():
+        own = {name.partition(".")[2]: v for name, v in values.items() if name.partition(".")[0] == family}
+        slots[family] = make_effect(family, effect_id, **own)
+    rest = {name: v for name, v in values.items() if name.partition(".")[0] not in effects}
+    return load_unit(unit).with_effects(**slots).with_updates(rest)

@@ -1,0 +1,33 @@
+"""Type aliases of the public interface, for annotations and type checkers.
+
+A model parameter is a float, or a 1-D array of values that makes a *batch* model
+integrated in one solver call (docs/api.md); the aliases below name that and the
+other recurring argument kinds. They are plain aliases: any value of the aliased
+types is accepted at run time.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from typing import TypeAlias, Union
+
+import numpy as np
+import numpy.typing as npt
+
+#: one value [SI unit of the quantity], or a 1-D array of values (a batch, one per sample)
+FloatOrArray: TypeAlias = Union[float, np.ndarray]
+
+#: anything numpy turns into a float array: a float, a list, a tuple, an ndarray
+ArrayLike: TypeAlias = npt.ArrayLike
+
+#: dotted parameter name (``"flexspline.h_c"``) to its value [SI], float or batch array
+ParameterValues: TypeAlias = Mapping[str, FloatOrArray]
+
+#: a file-system path given as text or as a path object
+PathLike: TypeAlias = Union[str, os.PathLike]
+
+#: per-parameter interval of a study: ``(low, high)`` [SI] or the text ``"LOW:HIGH"``
+Bounds: TypeAlias = Mapping[str, Union[tuple[float, float], str]]
+
+__all__ = ["FloatOrArray", "ArrayLike", "ParameterValues", "PathLike", "Bounds"]
