@@ -5,7 +5,7 @@ Examples::
     hdsim diagnose bench.csv --effects friction --json
     hdsim diagnose bench.csv --report diagnosis/      # figures + index.html / index.md
 
-See :mod:`hdsim.identification.diagnosis` for the procedure and the acceptance rule.
+See `hdsim.identification.diagnosis` for the procedure and the acceptance rule.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ HELP = "find the effect families a measurement needs: rank, add the best, refit,
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("diagnose", help=HELP, description=HELP + ".")
-    p.add_argument("data", metavar="DATA", help="measurement file (CSV or HDF5, contracts §1)")
+    p.add_argument("data", metavar="DATA", help="measurement file (CSV or HDF5; see docs/measurements.md)")
     p.add_argument("--effects", default="",
                    help="families or effect ids already in the model (the baseline)")
     p.add_argument("--unit", default=None, help="built-in unit to start from (default CSG-25-100)")

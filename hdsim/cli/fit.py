@@ -6,7 +6,7 @@ Examples::
     hdsim fit other_bench.csv --columns time_s=t,torque_Nm=T_out,angle_deg=pos --out fitted.toml
 
 The fitted parameter set is written as TOML (``--out``, default ``<data stem>.fit.toml`` in
-the current folder); :func:`hdsim.identification.fit.load_fitted` turns it back into a model.
+the current folder); `hdsim.identification.fit.load_fitted` turns it back into a model.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ HELP = "fit the model with the named effect families to a measurement file"
 
 def register(subparsers) -> None:
     p = subparsers.add_parser("fit", help=HELP, description=HELP + ".")
-    p.add_argument("data", metavar="DATA", help="measurement file (CSV or HDF5, contracts §1)")
+    p.add_argument("data", metavar="DATA", help="measurement file (CSV or HDF5; see docs/measurements.md)")
     p.add_argument("--effects", default="",
                    help="families or effect ids, e.g. hardening,friction or dahl; "
                         "absent: the base model (linear compliance and angle offset)")

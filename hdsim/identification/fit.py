@@ -41,7 +41,7 @@ def parse_effects(text) -> dict[str, str]:
     """``'friction,hardening'``, ``'dahl,tanh'`` or ``'friction=dahl'`` -> {family: effect id}.
 
     Family names take the family's default effect (`hdsim.model.effects.default_effect`); an effect id names its family; ``none`` and
-    empty entries are ignored. Unknown names raise :class:`InputError` with close matches.
+    empty entries are ignored. Unknown names raise `InputError` with close matches.
     """
     if text is None:
         return {}

@@ -21,6 +21,7 @@ replace by closed forms.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import ClassVar
 
 import numpy as np
@@ -120,13 +121,15 @@ class Friction(Effect):
     def quasistatic(self, states, start, end, spring):
         """The body at twist ``end`` reached monotonically from ``start`` (quasi-static step).
 
+        ``states`` has the states on its first axis; ``start`` and ``end`` are arrays.
+
         Returns
         -------
         tuple
             ``(B [N·m], dB/de [N·m/rad], states, spring torque [N·m], spring tangent [N·m/rad])``.
         """
         new = self.advance(states, start, end, spring)
-        direction = np.where(np.asarray(end) >= np.asarray(start), 1.0, -1.0)
+        direction = np.copysign(1.0, end - start)
         B, u, k = self.body_torque(spring, end, new)
         return B, self.path_tangent(new, direction, u, k), new, u, k
 
@@ -156,6 +159,14 @@ class _DahlLaw(Friction):
         """(σ [N·m/rad], F [N·m])."""
         raise NotImplementedError
 
+    @cached_property
+    def _decay(self):
+        """(σ/F [1/rad], F [N·m]) as arrays, computed once (the quasi-static loop calls
+        `advance` for every Newton iteration of every sample)."""
+        sigma, F = (np.asarray(v, dtype=float) for v in self._law())
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(sigma > 0.0, sigma / F, 0.0), F
+
     def parallel_torque(self, states):
         return _states(states)[0]
 
@@ -169,15 +180,14 @@ class _DahlLaw(Friction):
 
     def advance(self, states, start, end, spring):
         # exact: for a fixed direction z relaxes exponentially towards ±F over F/σ of twist
-        sigma, F = self._law()
-        z0 = _states(states)[0]
-        step = np.asarray(end, dtype=float) - start
-        target = np.where(step >= 0.0, 1.0, -1.0) * F
-        return (target - (target - z0) * np.exp(-sigma / F * np.abs(step)))[None]
+        decay, F = self._decay
+        step = end - start
+        target = np.copysign(F, step)
+        return (target - (target - states[0]) * np.exp(-decay * np.abs(step)))[None]
 
     def path_tangent(self, states, direction, spring_torque, spring_tangent):
         sigma, F = self._law()
-        return spring_tangent + fr.dahl_slope(_states(states)[0], direction, sigma, F)
+        return spring_tangent + fr.dahl_slope(states[0], direction, sigma, F)
 
 
 @dataclass(frozen=True, eq=False)

@@ -142,11 +142,9 @@ class TanhHardening(Hardening):
 
     def spring_law(self, c_struct, c_mesh):
         args = self._k(c_struct, c_mesh)
-
-        def law(twist):
-            with np.errstate(over="ignore"):  # cosh overflow far out: the tangent is K∞
-                return st.tanh_hardening_torque(twist, *args), st.tanh_hardening_tangent(twist, *args)
-        return law
+        # far out on the law cosh overflows and the tangent tends to K∞ as it should; the
+        # callers (solver, quasi-static evaluator) run under np.errstate(over="ignore")
+        return lambda twist: (st.tanh_hardening_torque(twist, *args), st.tanh_hardening_tangent(twist, *args))
 
     def free_parameters(self, context: FitContext):
         return (FreeParameter("curvature", 0.0, np.inf, 3.0 / (0.6 * context.max_torque) ** 2),
