@@ -52,7 +52,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hdsim.errors import InputError
+from hdsim.errors import InputError, SolverError
 from hdsim.identification.fit import (Evaluator, FitResult, build_model, effective_n, fit_many, make_problem,
                                       parse_effects, result_of)
 from hdsim.model import effects as fx
@@ -214,7 +214,17 @@ class Candidate:
     accepted: bool = False
     reason: str = ""
 
+    @classmethod
+    def failed(cls, family: str, effect: str, why: str) -> "Candidate":
+        """A candidate whose model could not be built or fitted: rejected, with the reason."""
+        return cls(family=family, effect=effect, fit=None, fold_fits=[], score=math.inf, n_eff=0.0,
+                   holdout_rmse=[], holdout_gain=[], pooled_holdout_gain=0.0, gain=0.0, accepted=False,
+                   reason=f"could not be fitted: {why}")
+
     def to_json(self) -> dict:
+        if self.fit is None:
+            return {"family": self.family, "effect": self.effect, "rmse_rad": None, "score": None,
+                    "passes": False, "why": self.reason}
         return {"family": self.family, "effect": self.effect, "rmse_rad": self.fit.rmse_rad,
                 "score": self.score, "n_eff": self.n_eff,
                 "max_abs_error_rad": self.fit.max_abs_rad,
@@ -400,12 +410,17 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
         # phase A: every candidate on all rows, from the baseline's values and afresh
         cands = []
         phase_a = []
+        failed = []  # candidates that could not be built: rejected with the reason, never fatal
         for family in todo:
             trial = dict(current)
             trial[family] = stand_in[family]
-            cmodel = build_model(unit, trial, meas)
-            warm = make_problem(cmodel, meas, ev, start=dict(step.fit.internal), label=f"{family}:all")
-            cold = make_problem(cmodel, meas, ev, start=None, label=f"{family}:all-fresh")
+            try:
+                cmodel = build_model(unit, trial, meas)
+                warm = make_problem(cmodel, meas, ev, start=dict(step.fit.internal), label=f"{family}:all")
+                cold = make_problem(cmodel, meas, ev, start=None, label=f"{family}:all-fresh")
+            except (InputError, SolverError) as exc:
+                failed.append(Candidate.failed(family, stand_in[family], str(exc)))
+                continue
             cands.append([family, cmodel, warm, cold])
             phase_a += [warm, cold]
         passes += fit_many(ev, phase_a)
@@ -425,10 +440,14 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
                 phase_b += [a, b]
             entry.append((best_all, pairs))
         passes += fit_many(ev, phase_b)
-        scored = []
+        scored = list(failed)
         for family, cmodel, warm, cold, (best_all, pairs) in cands:
             probs = [best_all] + [a if a.cost <= b.cost else b for a, b in pairs]
-            res = _results(ev, probs, unit_name)
+            try:
+                res = _results(ev, probs, unit_name)
+            except (InputError, SolverError) as exc:
+                scored.append(Candidate.failed(family, stand_in[family], str(exc)))
+                continue
             scored.append(_score(family, stand_in[family], res, step))
         step.candidates = scored
         ranked = sorted(scored, key=lambda c: c.score)

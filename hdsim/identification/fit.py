@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hdsim.errors import InputError, unknown_name
+from hdsim.errors import InputError, SolverError, unknown_name
 from hdsim.identification.optimizer import bic, effective_n, fit_many, residuals, uncertainty
 from hdsim.identification.problem import K0_NAME, Evaluator, FitProblem, make_problem
 from hdsim.io.measurement import Measurement
@@ -277,6 +277,9 @@ def result_of(ev: Evaluator, prob: FitProblem, unit: str = "") -> FitResult:
         if prob.names else {}
     model = prob.model.with_updates(updates) if updates else prob.model
     twist = ev.twist(model)
+    if not np.all(np.isfinite(twist)):
+        raise SolverError(f"the model {', '.join(prob.names) or 'structure'} cannot be evaluated on "
+                          f"this record: {prob.message or 'the torque balance has no solution'}")
     r_rows, full, coef = residuals(ev, prob, twist)
     coef = coef[0]
     offset = float(coef[0])

@@ -106,6 +106,9 @@ def _update(p: FitProblem, r_rows: np.ndarray, has_base: int, steps, trials, tol
         r0 = r_rows[0]
         p.r = r0
         p.cost = float(r0 @ r0)
+        if not np.isfinite(p.cost):
+            p.done, p.message = True, "failed: the model cannot be evaluated at the start values"
+            return
         p.J = ((r_rows[1:1 + k] - r0) / steps[:, None]).T if k else np.zeros((r0.size, 0))
         if k == 0:
             p.done, p.message = True, "nothing to fit: the linear part is solved exactly"
@@ -114,7 +117,10 @@ def _update(p: FitProblem, r_rows: np.ndarray, has_base: int, steps, trials, tol
     trial_r = r_rows[k:]
     # the Jacobian at the current point (evaluated around p.u); base residual is p.r
     J_new = ((Jcols - p.r) / steps[:, None]).T
+    if not np.all(np.isfinite(J_new)):  # a column the evaluator could not solve: keep the old one
+        J_new = np.where(np.isfinite(J_new), J_new, p.J)
     costs = np.einsum("ij,ij->i", trial_r, trial_r)
+    costs = np.where(np.isfinite(costs), costs, np.inf)  # a trial the evaluator could not solve
     best = int(np.argmin(costs))
     p.iterations += 1
     if costs[best] < p.cost:

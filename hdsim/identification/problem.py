@@ -30,6 +30,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from hdsim.identification.residuals import _direction as loading_direction
+from hdsim.errors import InputError
 from hdsim.io.measurement import Measurement
 from hdsim.model.drive import SLOTS, HarmonicDrive, compliance_chain
 from hdsim.model.effects import FitContext
@@ -204,6 +205,9 @@ class Evaluator:
         self.T = np.asarray(meas.torque, dtype=float)
         self.y = np.asarray(meas.angle, dtype=float)
         self.n = self.t.size
+        if not np.ptp(self.T) > 0.0:
+            raise InputError(f"{meas.source}: the torque never changes (it is {self.T[0]:g} N·m throughout): "
+                             "there is nothing to fit")
         # all samples up to max_steps, else a step budget (the grid adapts to each batch)
         self.grid = None if self.n <= max_steps else int(max_steps)
         if self.test == "kinematic_error":
@@ -223,8 +227,9 @@ class Evaluator:
         return ones if extra is None else np.hstack([ones, extra])
 
     def twist(self, models) -> np.ndarray:
-        """(M, n) quasi-static twist of the stacked models."""
-        return locked_twist(models, self.t, self.T, grid=self.grid)
+        """(M, n) quasi-static twist of the stacked models; NaN rows where the balance
+        could not be solved (the optimiser treats them as failed trials)."""
+        return locked_twist(models, self.t, self.T, grid=self.grid, on_failure="nan")
 
 
 # --------------------------------------------------------------------------- problems

@@ -227,6 +227,9 @@ def _rounds(diagnosis):
             continue
         lines = []
         for c in sorted(step.candidates, key=lambda c: c.score):
+            if c.fit is None:  # could not be fitted: the reason says why
+                lines.append([c.family, c.effect, "–", "–", "–", c.reason])
+                continue
             lines.append([c.family, c.effect, f"{c.score:.1f}", f"{c.fit.rmse_rad * arcsec:.2f}",
                           f"{100 * c.pooled_holdout_gain:.0f} % ("
                           + ", ".join(f"{100 * g:.0f} %" for g in c.holdout_gain) + ")", c.reason])

@@ -211,7 +211,9 @@ class HarmonicDrive:
         for prefix, values in grouped.items():
             attr = _COMPONENTS.get(prefix, prefix)
             changes[attr] = replace(getattr(self, attr), **values)
-        return replace(self, **changes)
+        model = replace(self, **changes)
+        model.batch_size  # arrays of different lengths are refused here, with their names' lengths
+        return model
 
     @property
     def batch_size(self) -> int:

@@ -151,7 +151,18 @@ def validate_geometry(g: FlexsplineGeometry) -> None:
         10 % of the bore radius, an end radius that does not fit between hub and
         cylinder, or no plain cylinder left in the cup.
     """
-    values = {f.name: np.asarray(getattr(g, f.name), dtype=float) for f in fields(g)}
+    values = {}
+    for f in fields(g):
+        try:
+            values[f.name] = np.asarray(getattr(g, f.name), dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"flexspline.{f.name} must be a number, got {getattr(g, f.name)!r}") from None
+        if values[f.name].ndim > 1:
+            raise InputError(f"flexspline.{f.name} must be a number or a 1-D array, "
+                             f"got shape {values[f.name].shape}")
+    sizes = {v.size for v in values.values() if v.ndim == 1} - {1}
+    if len(sizes) > 1:
+        raise InputError(f"flexspline batch parameters have different lengths {sorted(sizes)}")
     batched = any(v.ndim > 0 for v in values.values())
     for name, v in values.items():
         i = _first_bad(~np.isfinite(v) | (v <= 0.0))

@@ -42,24 +42,28 @@ def check(data: dict, source: str) -> None:
         raise InputError(f"{source}: load.amplitude must be in (0, 5] (fraction of T_N)")
     if load["cycles"] < 1 or load["rate"] <= 0:
         raise InputError(f"{source}: load.cycles must be >= 1 and load.rate > 0")
+    if "lost_motion_centre_line" in data.get("metrics", []) and load["amplitude"] <= 0.04:
+        raise InputError(f"{source}: lost_motion_centre_line reads the loop between ±4 % T_N and needs "
+                         f"load.amplitude above 0.04 (it is {load['amplitude']:g})")
 
 
 def breakpoints(model: HarmonicDrive):
-    """The breakpoints (T1, T2) [N·m] of the unit's three-segment stiffness law.
+    """The breakpoints (T1, T2) [N·m] at which the stiffness metrics split the loading branch.
 
-    Catalog values if the model is a catalog unit, else the hardening law's.
+    The hardening law's own breakpoints when it has them (so a changed ``hardening.T1``
+    moves the metric with it), else the catalog values of a catalog unit.
 
     Raises
     ------
     InputError
         If neither is known.
     """
+    hardening = model.hardening
+    if hasattr(hardening, "T1") and hasattr(hardening, "T2"):
+        return hardening.T1, hardening.T2
     catalog = model.provenance.get("catalog")
     if catalog:
         return catalog["T1"], catalog["T2"]
-    hardening = model.hardening
-    if hasattr(hardening, "T1"):
-        return hardening.T1, hardening.T2
     raise InputError("stiffness metrics need breakpoints T1, T2: use a catalog unit or "
                      "a three_segment hardening effect")
 

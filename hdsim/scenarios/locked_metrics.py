@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from hdsim.errors import InputError
+
 from hdsim.physics.stiffness import fit_three_segment, three_segment_twist
 from hdsim.units import rad_to_arcmin
 
@@ -195,10 +197,11 @@ def locked_metrics(names, torque, twist, levels, n, T1, T2, rated_torque) -> dic
         elif name == "hysteresis_loss":
             out["hysteresis_loss_arcmin"] = rad_to_arcmin(hysteresis_loss(torque, twist, levels, n))
         elif name == "lost_motion_centre_line":
+            if amplitude <= 0.04:  # the scenario check refuses this before any simulation
+                raise InputError("lost_motion_centre_line needs a cycle beyond ±4 % T_N")
             level = 0.04 * np.asarray(rated_torque)
-            if 0.04 < amplitude:
-                out["lost_motion_centre_line_arcmin"] = rad_to_arcmin(
-                    lost_motion_centre_line(torque, twist, levels, n, level))
+            out["lost_motion_centre_line_arcmin"] = rad_to_arcmin(
+                lost_motion_centre_line(torque, twist, levels, n, level))
         elif name == "stiffness":
             K1, K2, K3, phi_rated = stiffness_fit(torque, twist, levels, n, T1, T2, rated_torque)
             out.update(K1_Nm_per_rad=K1, K2_Nm_per_rad=K2, K3_Nm_per_rad=K3,

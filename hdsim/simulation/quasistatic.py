@@ -58,7 +58,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hdsim.errors import InputError
+from hdsim.errors import InputError, SolverError
 from hdsim.model import effects as fx
 from hdsim.model.drive import HarmonicDrive
 
@@ -193,7 +193,7 @@ class _Kernel:
 
 
 def locked_twist(models, time, torque, *, grid=None, tol=1e-9, x_tol=1e-8, max_iter=60,
-                 return_states=False):
+                 return_states=False, on_failure: str = "raise"):
     """Quasi-static output twist [rad] of the locked-WG bench under a measured torque.
 
     Parameters
@@ -222,6 +222,17 @@ def locked_twist(models, time, torque, *, grid=None, tol=1e-9, x_tol=1e-8, max_i
     return_states : bool
         Also return the friction states: shape (M, n) for a one-state law (the Dahl
         torque ``z`` [N·m]), else (n_states, M, n).
+    on_failure : {"raise", "nan"}
+        What to do with a parameter set whose torque balance Newton could not solve
+        within ``max_iter`` at some sample: raise `SolverError` naming the sample, or
+        give that row NaN (the fit treats it as a trial that failed).
+
+    Raises
+    ------
+    InputError
+        Time and torque of different lengths, not finite, or time not strictly increasing.
+    SolverError
+        A torque balance not solved (with ``on_failure="raise"``).
 
     Returns
     -------
@@ -229,14 +240,33 @@ def locked_twist(models, time, torque, *, grid=None, tol=1e-9, x_tol=1e-8, max_i
         Twist of each stacked parameter set from the virgin state (zero twist, zero
         friction torque) at the first sample's torque.
     """
-    plan = models if isinstance(models, Plan) else stack_models(models)
-    with np.errstate(over="ignore"):  # cosh overflow far out on the tanh law: tangent → K∞
-        return _locked_twist(plan, time, torque, grid, tol, x_tol, max_iter, return_states)
-
-
-def _locked_twist(plan, time, torque, grid, tol, x_tol, max_iter, return_states):
     t = np.asarray(time, dtype=float)
     T = np.asarray(torque, dtype=float)
+    if t.ndim != 1 or t.shape != T.shape or t.size < 2:
+        raise InputError(f"time and torque must be 1-D of one length (>= 2), got {t.shape} and {T.shape}")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(T))):
+        raise InputError("time and torque must be finite")
+    if np.any(np.diff(t) <= 0.0):
+        i = int(np.argmax(np.diff(t) <= 0.0))
+        raise InputError(f"time must be strictly increasing: sample {i + 1} is at {t[i + 1]:g} s "
+                         f"after {t[i]:g} s")
+    if on_failure not in ("raise", "nan"):
+        raise InputError(f"on_failure must be 'raise' or 'nan', got {on_failure!r}")
+    plan = models if isinstance(models, Plan) else stack_models(models)
+    with np.errstate(over="ignore"):  # cosh overflow far out on the tanh law: tangent → K∞
+        out, failed = _locked_twist(plan, t, T, grid, tol, x_tol, max_iter, return_states)
+    if np.any(failed >= 0):
+        x = out[0] if return_states else out
+        if on_failure == "raise":
+            row = int(np.argmax(failed >= 0))
+            raise SolverError(f"quasi-static bench: the torque balance of parameter set {row} was not "
+                              f"solved at sample {failed[row]} (t = {t[failed[row]]:g} s) within "
+                              f"{max_iter} Newton iterations")
+        x[failed >= 0] = np.nan
+    return out
+
+
+def _locked_twist(plan, t, T, grid, tol, x_tol, max_iter, return_states):
     if isinstance(grid, str) or (isinstance(grid, (int, np.integer)) and not isinstance(grid, bool)):
         budget = 4000 if isinstance(grid, str) else int(grid)
         t_max = max(float(np.max(np.abs(T))), 1e-12)
@@ -250,8 +280,10 @@ def _locked_twist(plan, time, torque, grid, tol, x_tol, max_iter, return_states)
     e_out = np.empty((M, idx.size))
     s_out = np.empty((kern.n_states, M, idx.size)) if return_states else None
     k0 = kern.k0
-    e, s, u, k = _solve(kern, Tg[0] / k0, np.zeros(M), kern.zero_states(), Tg[0], None, tol_T, x_tol,
-                        max_iter, np.abs(Tg[0]) / k0)
+    failed = np.full(M, -1)  # first grid sample whose balance was not solved, per row
+    e, s, u, k, ok = _solve(kern, Tg[0] / k0, np.zeros(M), kern.zero_states(), Tg[0], None, tol_T, x_tol,
+                            max_iter, np.abs(Tg[0]) / k0)
+    failed[(failed < 0) & ~ok] = idx[0]
     e_out[:, 0] = e
     if return_states:
         s_out[:, :, 0] = s
@@ -261,8 +293,9 @@ def _locked_twist(plan, time, torque, grid, tol, x_tol, max_iter, return_states)
         dT = Tg[j] - Tg[j - 1]
         guess = e + dT / k0 if h_prev is None else e + (e - e_prev) * (h / h_prev)
         rate = kern.rate_coefficients(k, u, s, dT, h)
-        e_new, s, u, k = _solve(kern, guess, e, s, Tg[j], rate, tol_T, x_tol, max_iter,
-                                np.abs(dT) / k0)
+        e_new, s, u, k, ok = _solve(kern, guess, e, s, Tg[j], rate, tol_T, x_tol, max_iter,
+                                    np.abs(dT) / k0)
+        failed[(failed < 0) & ~ok] = idx[j]
         e_prev, e, h_prev = e, e_new, h
         e_out[:, j] = e
         if return_states:
@@ -274,12 +307,16 @@ def _locked_twist(plan, time, torque, grid, tol, x_tol, max_iter, return_states)
             s_out = np.array([_interp_rows(t, tg, rows) for rows in s_out]).reshape(kern.n_states, M, t.size)
     x_out = kern.output_twist(e_out, T)
     if not return_states:
-        return x_out
-    return x_out, (s_out[0] if kern.n_states == 1 else s_out)
+        return x_out, failed
+    return (x_out, (s_out[0] if kern.n_states == 1 else s_out)), failed
 
 
 def _solve(kern, guess, e0, s0, torque, rate, tol_T, x_tol, max_iter, x_scale):
-    """Newton on the monotone balance of one step: (body twist, friction states, spring torque, tangent).
+    """Newton on the monotone balance of one step.
+
+    Returns (body twist, friction states, spring torque, spring tangent, solved): a row
+    is solved when its last Newton step fell below ``x_tol`` or its balance residual
+    below ``tol_T``.
 
     Plain Newton steps first; if they have not converged after three, the iteration
     keeps a bracket (the balance is increasing in e) and bisects when a Newton step
@@ -287,6 +324,7 @@ def _solve(kern, guess, e0, s0, torque, rate, tol_T, x_tol, max_iter, x_scale):
     """
     x = guess
     lo = hi = None
+    solved = np.zeros(np.shape(x), dtype=bool)
     for it in range(max_iter):
         g, dg, u, k = kern.balance(x, e0, s0, torque, rate)
         # the balance is increasing in e (dg ≥ spring tangent > 0); the floor guards round-off
@@ -307,11 +345,12 @@ def _solve(kern, guess, e0, s0, torque, rate, tol_T, x_tol, max_iter, x_scale):
             xn = np.where(both & ((xn <= lo) | (xn >= hi)), mid, xn)
             base = np.where(both, base, 2.0 * base)
             step = np.where(np.abs(g) <= tol_T, 0.0, xn - x)
+        solved = (np.abs(step) <= x_tol) | (np.abs(g) <= tol_T)
         x = x + step
         if np.abs(step).max() <= x_tol:
             break
     s = kern.friction.advance(s0, e0, x, kern.spring) if kern.n_states else s0
-    return x, s, u, k
+    return x, s, u, k, solved & np.isfinite(x)
 
 
 def _interp_rows(t, tg, values):

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -17,7 +18,7 @@ from threadpoolctl import threadpool_limits
 
 from hdsim.simulation.block_radau import BlockDiagonalRadau
 from hdsim.simulation.path import ODESystem
-from hdsim.errors import SolverError
+from hdsim.errors import InputError, SolverError
 
 TWO_PI = 2.0 * np.pi
 
@@ -38,6 +39,21 @@ class SolverOptions:
     rtol: float = 1e-6
     atol_scale: float = 1e-6  # absolute tolerance = this × each state's typical magnitude
     max_step: float = np.inf
+
+    #: the methods that can integrate the model: the dead zone's contact and a damped body
+    #: behind it give time constants of ~1e-10 s, which an explicit method (RK45, RK23,
+    #: DOP853) would have to resolve step by step, for hours
+    IMPLICIT: ClassVar[tuple[str, ...]] = ("Radau", "BDF", "LSODA")
+
+    def __post_init__(self):
+        if self.method not in self.IMPLICIT:
+            raise InputError(f"solver method '{self.method}' is explicit or unknown: the contact of the "
+                             f"dead zone is stiff (time constants of ~1e-10 s); use one of "
+                             f"{', '.join(self.IMPLICIT)}")
+        for name in ("rtol", "atol_scale", "max_step"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and value > 0 and value == value):
+                raise InputError(f"solver {name} must be a positive number, got {value!r}")
 
     def replace(self, **kw) -> "SolverOptions":
         """A copy with the given fields changed."""

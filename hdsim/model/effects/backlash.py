@@ -138,12 +138,16 @@ class DeadZoneBacklash(Backlash):
         # damped body: it relaxes towards the torque the dead zone passes on
         body_rate = (torque - total) / np.where(damped, c, 1.0)
         closure_rate = (twist_rate - body_rate) / slope
-        # In contact the body twists with the output; its relaxation rate equals ẋ up to a
-        # transient of time constant c·ε/K₀ (a fraction of a nanosecond). The friction law
-        # is given the rate of that slow manifold, κẋ + (1 − κ)ė: its direction switch
+        # Deep in contact the body twists with the output; its relaxation rate equals ẋ up
+        # to a transient of time constant c·ε/K₀ (a fraction of a nanosecond). There the
+        # friction law is given the rate of that slow manifold, ẋ: its direction switch
         # then does not ride on the transient, which otherwise cost the implicit solver
-        # twenty times the Jacobians on a driven run (docs/physics.md §6.2).
-        body_rate = contact * twist_rate + (1.0 - contact) * body_rate
+        # twenty times the Jacobians on a driven run. The weight rises from 0 to 1 while
+        # the contact factor goes from 0.99 to 0.999, so in the gap and in the rounded
+        # corner the body's own rate counts (docs/physics.md §6.2).
+        weight = np.clip((contact - 0.99) / 0.009, 0.0, 1.0)
+        weight = weight * weight * (3.0 - 2.0 * weight)
+        body_rate = weight * twist_rate + (1.0 - weight) * body_rate
         if not np.all(damped):
             # undamped body: the balance T = B holds; its time derivative fixes the rates, and
             # a slow pull (stabilisation_time) keeps round-off from drifting off the balance

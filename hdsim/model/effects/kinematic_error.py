@@ -8,6 +8,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from hdsim.errors import InputError
 from hdsim.model.effects.base import Effect
 from hdsim.model.parameters import param
 from hdsim.physics import kinematic_error as ke
@@ -70,8 +71,9 @@ def _per_sample(value):
 class FourierKinematicError(KinematicError):
     """Kinematic error harmonics at 1×, 2×, 4× the wave-generator angle and 1× output.
 
-    Amplitudes scale with ``1 + load_gain·|T|/T_N`` (Ghorbel et al., 2001, observed
-    KE varying with load). In a fit the amplitudes and phases enter as sine/cosine
+    Amplitudes scale with ``max(1 + load_gain·|T|/T_N, 0)`` (Ghorbel et al., 2001, observed
+    KE varying with load); a negative gain shrinks the error to zero and no further, so
+    it never changes sign beyond ``|T| = T_N/|load_gain|``. In a fit the amplitudes and phases enter as sine/cosine
     coefficients solved by linear least squares; ``load_gain`` stays at 0.
     """
 
@@ -97,7 +99,7 @@ class FourierKinematicError(KinematicError):
         return wg, ((1.0, f(self.a_out), f(self.p_out)),), f(self.load_gain)
 
     def displacement(self, wg_angle, output_angle, load_fraction):
-        scale = 1.0 + self.load_gain * np.abs(load_fraction)
+        scale = np.maximum(1.0 + self.load_gain * np.abs(load_fraction), 0.0)
         return scale * ke.fourier_kinematic_error(
             wg_angle, output_angle, (1, 2, 4), (self.a1, self.a2, self.a4), (self.p1, self.p2, self.p4),
             (1,), (self.a_out,), (self.p_out,))
@@ -113,8 +115,10 @@ class FourierKinematicError(KinematicError):
             arg = k * output_angle + p
             base = base + a * np.sin(arg)
             d_o = d_o + a * k * np.cos(arg)
-        scale = 1.0 + gain * np.abs(load_fraction)
-        return scale * base, scale * d_w, scale * d_o, gain * np.sign(load_fraction) * base
+        raw = 1.0 + gain * np.abs(load_fraction)
+        scale = np.maximum(raw, 0.0)
+        d_f = np.where(raw > 0.0, gain * np.sign(load_fraction), 0.0) * base
+        return scale * base, scale * d_w, scale * d_o, d_f
 
     def linear_basis(self, wg_angle, output_angle):
         columns = []
@@ -130,9 +134,14 @@ class FourierKinematicError(KinematicError):
         amp_names = [f"a{k}" for k in self.wg_orders] + ["a_out"]
         phase_names = [f"p{k}" for k in self.wg_orders] + ["p_out"]
         upper = self.param_meta()["a1"]["bounds"][1]
+        clipped = [name for a, name in zip(amplitudes, amp_names) if a > upper]
+        if clipped:  # beyond the physical bound: the record is not a kinematic error of this size
+            raise InputError(f"fitted kinematic-error amplitude {', '.join(clipped)} exceeds "
+                             f"{upper:g} rad ({upper * 180 / np.pi * 60:.0f} arcmin): the angles do not "
+                             "look like a kinematic-error test (check units and the ratio)")
         values = {"load_gain": 0.0}
         for a, p, an, pn in zip(amplitudes, phases, amp_names, phase_names):
-            values[an] = float(min(a, upper))
+            values[an] = float(a)
             values[pn] = float(p)
         return type(self)(**values), values
 
