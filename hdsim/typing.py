@@ -15,19 +15,19 @@ from typing import TypeAlias, Union
 import numpy as np
 import numpy.typing as npt
 
-#: one value [SI unit of the quantity], or a 1-D array of values (a batch, one per sample)
-FloatOrArray: TypeAlias = Union[float, np.ndarray]
-
-#: anything numpy turns into a float array: a float, a list, a tuple, an ndarray
-ArrayLike: TypeAlias = npt.ArrayLike
-
-#: dotted parameter name (``"flexspline.h_c"``) to its value [SI], float or batch array
-ParameterValues: TypeAlias = Mapping[str, FloatOrArray]
-
-#: a file-system path given as text or as a path object
-PathLike: TypeAlias = Union[str, os.PathLike]
-
-#: per-parameter interval of a study: ``(low, high)`` [SI] or the text ``"LOW:HIGH"``
-Bounds: TypeAlias = Mapping[str, Union[tuple[float, float], str]]
-
 __all__ = ["FloatOrArray", "ArrayLike", "ParameterValues", "PathLike", "Bounds"]
+
+FloatOrArray: TypeAlias = Union[float, np.ndarray]
+"""One value [SI unit of the quantity], or a 1-D array of values (a batch, one per sample)."""
+
+ArrayLike: TypeAlias = npt.ArrayLike
+"""Anything numpy turns into a float array: a float, a list, a tuple, an ndarray."""
+
+ParameterValues: TypeAlias = Mapping[str, FloatOrArray]
+"""Dotted parameter name (``"flexspline.h_c"``) to its value [SI], a float or a batch array."""
+
+PathLike: TypeAlias = Union[str, os.PathLike]
+"""A file-system path given as text or as a path object."""
+
+Bounds: TypeAlias = Mapping[str, Union[tuple[float, float], str]]
+"""Per-parameter interval of a study: ``(low, high)`` [SI unit of the parameter] or ``"LOW:HIGH"``."""

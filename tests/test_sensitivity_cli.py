@@ -83,4 +83,7 @@ def test_unit_study_through_simulator(capsys):
     out = _json(capsys, argv)
     assert out["output"] == "lost_motion_arcmin" and out["evaluations"] == 16 * 4
     assert out["params"] == ["h_pz", "h_c"] and out["checks"]["items"]
-    assert out["model"] == {"unit": "CSG-25-100", "output": "lost_motion_arcmin", "scenario": None}
+    model = dict(out["model"])
+    fingerprint = model.pop("fingerprint")  # of the drive's parameters and the scenario
+    assert isinstance(fingerprint, str) and len(fingerprint) == 16
+    assert model == {"unit": "CSG-25-100", "output": "lost_motion_arcmin", "scenario": None}

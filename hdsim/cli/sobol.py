@@ -4,6 +4,8 @@ Examples::
 
     hdsim sobol --unit CSG-25-100 --params h_pz,h_c,R_v,R_k,h_p --range 10% \\
                 --output lost_motion_arcmin --n 1024 --second-order --out study.h5 --json
+    hdsim sobol --unit fitted.toml --scenario my_test.toml --params h_pz,backlash.gap \\
+                --range 10% --output lost_motion_arcmin --n 256 --json
     hdsim sobol --function ishigami --n 4096 --json
 """
 
@@ -22,7 +24,9 @@ HELP = "Sobol' sensitivity study (first, total, optional second order) with chec
 def register(subparsers) -> None:
     p = subparsers.add_parser("sobol", help=HELP, description=HELP + ".")
     what = p.add_mutually_exclusive_group()
-    what.add_argument("--unit", help="built-in unit to study through the simulator")
+    what.add_argument("--unit", metavar="UNIT|FIT.toml",
+                      help="drive to study through the simulator: a built-in unit (see "
+                           "'hdsim units') or a fitted-model file written by 'hdsim fit --out'")
     what.add_argument("--function", help="closed form: ishigami, gfunction or linear")
     what.add_argument("--model", metavar="MODULE:CALLABLE",
                       help="any picklable f(X) -> y importable from PYTHONPATH")
@@ -34,7 +38,9 @@ def register(subparsers) -> None:
     p.add_argument("--dist", nargs="+", action="extend", default=[],
                    metavar="NAME=unif|logunif|norm[:MEAN:SD]", help="input distribution")
     p.add_argument("--output", help="metric to study (required with --unit)")
-    p.add_argument("--scenario", help="scenario the metric comes from (--unit)")
+    p.add_argument("--scenario", metavar="NAME|FILE.toml",
+                   help="scenario the metric comes from (--unit): a built-in name or a "
+                        "scenario file (default: the built-in scenario reporting --output)")
     p.add_argument("--n", default="1024", help="base points N, a power of 2 (default 1024)")
     p.add_argument("--second-order", action="store_true", help="also estimate S2")
     p.add_argument("--seed", default="0", help="scramble seed (default 0)")
@@ -73,7 +79,7 @@ def run(args) -> int:
                                chunksize=chunksize, out=args.out, resume=args.resume,
                                retry_failed=args.retry_failed, target_width=target,
                                model=model)
-    except RuntimeError as exc:  # model failing everywhere, broken pool, no hdsim.sensitivity.scenario_outputs
+    except RuntimeError as exc:  # model failing everywhere, nominal run unsolvable, broken pool
         print(f"hdsim sobol: error: {exc}", file=sys.stderr)
         return 1
     summary = result.to_json(output)
@@ -107,8 +113,23 @@ def _resolve(args, models):
     if args.unit:
         if not names:
             raise InputError("--unit studies need --params NAME,NAME,...")
-        return models.from_unit(args.unit, names, args.output, args.scenario, frac, bounds, dists)
+        return models.from_unit(_drive(args.unit), names, args.output, args.scenario, frac,
+                                bounds, dists)
     raise InputError("say what to study: --unit U, --function NAME or --model MODULE:CALLABLE")
+
+
+def _drive(text: str):
+    """A built-in unit name as it is; a fitted-model file as the `HarmonicDrive` it holds."""
+    from hdsim.model.catalog import unit_names
+
+    if text in unit_names():
+        return text
+    path = Path(text)
+    if path.suffix.lower() == ".toml" or path.exists() or any(c in text for c in "/\\"):
+        from hdsim.identification.fit import load_fitted
+
+        return load_fitted(path)  # a missing or foreign file is one InputError line
+    return text  # an unknown name: the catalog names the close matches
 
 
 def _extras(args, model, analytic, names, result) -> dict:

@@ -5,12 +5,15 @@ and structure checks), `hdsim.sensitivity.evaluate` (local or any-executor
 evaluation by row index), `hdsim.sensitivity.store` (resumable HDF5 studies),
 `hdsim.sensitivity.analysis` (indices, both interval kinds, convergence),
 `hdsim.sensitivity.checks` (consistency safeguards), `hdsim.sensitivity.functions`
-(closed forms with analytic indices), `hdsim.sensitivity.study` (the whole study).
+(closed forms with analytic indices), `hdsim.sensitivity.study` (the whole study),
+`hdsim.sensitivity.scenario_outputs` (a simulator metric as ``f(X)``) and
+`hdsim.sensitivity.api` (`sobol`: a study of any drive object).
 The figures are in `hdsim.plotting.sensitivity`; the method is described in
 docs/sensitivity.md.
 """
 
 from hdsim.sensitivity.analysis import analyse, convergence, estimates
+from hdsim.sensitivity.api import sobol
 from hdsim.sensitivity.checks import consistency_checks
 from hdsim.sensitivity.design import DesignError, check_design, fingerprint
 from hdsim.sensitivity.evaluate import Evaluation, ModelError, evaluate, open_executor
@@ -23,5 +26,5 @@ __all__ = [
     "analyse", "convergence", "estimates", "consistency_checks", "DesignError",
     "check_design", "fingerprint", "Evaluation", "ModelError", "evaluate", "open_executor",
     "FUNCTIONS", "GFunction", "Ishigami", "Linear", "get_function", "Problem",
-    "build_problem", "uniform", "StudyResult", "run_study", "resolved_indices",
+    "build_problem", "uniform", "StudyResult", "run_study", "resolved_indices", "sobol",
 ]

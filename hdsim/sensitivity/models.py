@@ -15,19 +15,48 @@ from hdsim.sensitivity.problem import build_problem
 
 
 def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, dists=None):
-    """Study of simulator ``unit``: parameters by dotted name, ``output`` a metric.
+    """Study of a drive through the simulator: parameters by dotted name, ``output`` a metric.
 
-    Calls `hdsim.sensitivity.scenario_outputs.nominal_values` and `hdsim.sensitivity.scenario_outputs.model_function`
-    (imported lazily: the simulator is only needed for unit studies).
+    Parameters
+    ----------
+    unit : HarmonicDrive, str or None
+        Any single model (built-in, modified, fitted) or a built-in unit name.
+    names : list of str
+        Parameters to vary (``h_pz`` or dotted, ``friction.slip_torque``).
+    output : str
+        The metric, e.g. ``lost_motion_arcmin``.
+    scenario : Scenario, str or os.PathLike, optional
+        A scenario, a built-in scenario name or a scenario file; default the built-in
+        scenario producing ``output``.
+    range_frac, bounds, dists
+        As `hdsim.sensitivity.problem.build_problem`; nominal values come from the drive.
+
+    Returns
+    -------
+    tuple
+        ``(func, problem, output, model, None)``; ``model`` is
+        ``{"unit", "output", "scenario", "fingerprint"}``: the drive's name, the
+        scenario's name (None for the default one) and
+        `hdsim.sensitivity.scenario_outputs.drive_fingerprint` of drive and scenario,
+        so resuming a study with another drive or scenario is refused.
+
+    Notes
+    -----
+    The simulator interface (`hdsim.sensitivity.scenario_outputs`) is imported here,
+    not at the top: analytic-function studies do not need scipy's solvers or the catalog.
     """
     if not output:
         raise InputError("--unit studies need --output METRIC (e.g. lost_motion_arcmin)")
     batch = _batch()
-    # nominal values only matter for --range; without it the unit is not loaded here
-    nominal = {} if range_frac is None else batch.nominal_values(unit, list(names))
+    drive = batch.as_drive(unit)
+    # nominal values only matter for --range
+    nominal = {} if range_frac is None else batch.nominal_values(drive, list(names))
     problem = build_problem(names, nominal, range_frac, bounds, dists)
-    func = batch.model_function(unit, list(names), output, scenario)
-    model = {"unit": unit, "output": output, "scenario": scenario}
+    func = batch.model_function(unit if isinstance(unit, str) else drive, list(names),
+                                output, scenario)
+    model = {"unit": drive.name, "output": output,
+             "scenario": None if scenario is None else func.scenario.name,
+             "fingerprint": batch.drive_fingerprint(drive, func.scenario)}
     return func, problem, output, model, None
 
 

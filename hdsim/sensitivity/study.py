@@ -40,7 +40,10 @@ class StudyResult:
     study: str | None = None
     extra: dict = field(default_factory=dict)
 
-    def to_json(self, output: str) -> dict:
+    def to_json(self, output: str | None = None) -> dict:
+        """The ``hdsim sobol --json`` object (docs/cli.md); ``output`` names the metric
+        (default: the one `hdsim.sensitivity.api.sobol` studied)."""
+        output = output if output is not None else self.extra.get("output", "")
         names, a = list(self.problem.names), self.analysis
         per = lambda v: {nm: _num(x) for nm, x in zip(names, v)}  # noqa: E731
         out = {"output": output, "n": self.n, "evaluations": self.evaluations,

@@ -46,7 +46,7 @@ class NoHardening(Hardening):
         return twist / (c_struct + c_mesh)
 
     def tangent(self, twist, c_struct, c_mesh):
-        return np.broadcast_to(1.0 / (c_struct + c_mesh), np.shape(twist))
+        return np.zeros_like(np.asarray(twist, dtype=float)) + 1.0 / (c_struct + c_mesh)
 
     def spring_law(self, c_struct, c_mesh):
         k = 1.0 / (c_struct + c_mesh)
