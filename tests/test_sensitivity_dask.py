@@ -41,3 +41,51 @@ def test_cli_dask_address_matches_local(cluster, capsys):
     for key in KEYS:
         assert remote[key] == local[key]
     assert remote["executor"].startswith("dask://")
+
+
+class SlowG:
+    """The G function, slowed so a worker can be killed while chunks are in flight."""
+
+    def __init__(self):
+        self.g = GFunction()
+
+    def __call__(self, X):
+        import time
+
+        time.sleep(0.05)  # 80 chunks on two workers: about 2 s
+        return self.g(X)
+
+
+def test_study_survives_a_killed_dask_worker():
+    """A worker process killed mid-study (SIGKILL): its chunks run again elsewhere and the
+    indices equal those of a local study."""
+    import os
+    import signal
+    import sys
+    import threading
+    import time
+
+    import cloudpickle
+
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])  # workers cannot import tests/
+    g = GFunction()
+    local = run_study(g, g.problem(), 128, seed=4, workers=1, progress=False).analysis
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        pids = list(client.run(os.getpid).values())
+        holder = {}
+
+        def study():
+            holder["result"] = run_study(SlowG(), g.problem(), 128, seed=4, chunksize=16, progress=False,
+                                         executor=client.get_executor(pure=False))
+
+        thread = threading.Thread(target=study)
+        thread.start()
+        time.sleep(0.7)  # a third of the way in
+        assert thread.is_alive(), "study ended before a worker could be killed"
+        os.kill(pids[0], signal.SIGKILL)
+        thread.join(timeout=120)
+        assert not thread.is_alive()
+    remote = holder["result"].analysis
+    for key in KEYS:
+        np.testing.assert_array_equal(local[key], remote[key])

@@ -27,7 +27,7 @@ SLOW_MODEL = textwrap.dedent("""
     _f = Ishigami()
 
     def slow(X):
-        time.sleep(0.004 * len(X))
+        time.sleep(float(os.environ.get("SLOW_SLEEP", "0.004")) * len(X))
         # One line per evaluated row, written only after it was evaluated.
         with open(os.environ["SLOW_LOG"], "a") as fh:
             fh.write("".join(row.tobytes().hex() + "\\n" for row in X))
@@ -40,9 +40,9 @@ ARGS = ["--model", "slowmodel:slow", "--params", "x1,x2,x3",
         "--n", "256", "--seed", "5", "--workers", "2", "--chunksize", "16", "--json"]
 
 
-def _run(tmp_path, out, log, extra=(), wait=True):
+def _run(tmp_path, out, log, extra=(), wait=True, sleep=0.004):
     env = {**os.environ, "PYTHONPATH": f"{tmp_path}{os.pathsep}{os.environ.get('PYTHONPATH', '')}",
-           "SLOW_LOG": str(log)}
+           "SLOW_LOG": str(log), "SLOW_SLEEP": str(sleep)}
     cmd = [sys.executable, "-m", "hdsim", "sobol", *ARGS, "--out", str(out), *extra]
     proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True, start_new_session=True)
@@ -99,6 +99,49 @@ def test_sigkill_then_resume_matches_uninterrupted(tmp_path):
         assert resumed[key] == ref[key], key
     assert resumed["evaluations"] == ref["evaluations"] == total
     assert resumed["evaluated_now"] == len(after)
+
+
+def test_main_process_killed_workers_die_and_study_resumes_at_once(tmp_path):
+    """What the OOM killer or a batch scheduler does: SIGKILL of the study process only.
+
+    The two pool workers must not outlive it (they would hold the study file), and
+    ``--resume`` one second later finishes with the indices of an uninterrupted study
+    and no finished row evaluated twice."""
+    psutil = pytest.importorskip("psutil")
+    (tmp_path / "slowmodel.py").write_text(SLOW_MODEL)
+    total = 256 * 5
+    ref = _run(tmp_path, tmp_path / "ref.h5", tmp_path / "ref.log", sleep=0.0)
+
+    out, log = tmp_path / "cut.h5", tmp_path / "cut.log"
+    proc = _run(tmp_path, out, log, wait=False, sleep=0.006)
+    deadline = time.time() + 60
+    while len(_lines(log)) < total // 3 and time.time() < deadline and proc.poll() is None:
+        time.sleep(0.02)
+    assert proc.poll() is None, "study finished before it could be killed"
+    workers = psutil.Process(proc.pid).children(recursive=True)
+    assert len(workers) >= 2
+    os.kill(proc.pid, signal.SIGKILL)  # the main process only, as the OOM killer does
+    proc.wait()
+    _, alive = psutil.wait_procs(workers, timeout=1.0)
+
+    def running(p):  # a zombie has exited and holds no file; only its exit status is left
+        try:
+            return p.status() != psutil.STATUS_ZOMBIE
+        except psutil.NoSuchProcess:
+            return False
+
+    alive = [p for p in alive if running(p)]
+    assert not alive, f"pool workers outlived the study: {[p.pid for p in alive]}"
+
+    rows, status = _rows_hex(out)
+    done_at_kill = {rows[i] for i in np.flatnonzero(status == DONE)}
+    before = _lines(log)
+    resumed = _run(tmp_path, out, log, extra=["--resume"], sleep=0.0)  # within the second
+    after = _lines(log)[len(before):]
+    assert not set(after) & done_at_kill, "a finished row was evaluated again"
+    for key in ("S1", "ST", "S1_conf", "ST_conf"):
+        assert resumed[key] == ref[key], key
+    assert resumed["evaluations"] == total
 
 
 def test_doubling_n_reuses_rows_and_equals_fresh_study(tmp_path):

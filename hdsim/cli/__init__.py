@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import os
 import sys
 
 from hdsim.errors import InputError, SolverError
@@ -27,6 +28,9 @@ def build_parser() -> argparse.ArgumentParser:
     from hdsim import __version__
 
     parser.add_argument("--version", action="version", version=f"hdsim {__version__}")
+    parser.add_argument("--debug", action="store_true",
+                        help="show the Python traceback of an error (anywhere on the command line; "
+                             "or set HDSIM_DEBUG=1)")
     subparsers = parser.add_subparsers(dest="verb", metavar="VERB")
     for verb in VERBS:
         try:
@@ -58,18 +62,36 @@ def _json_default(value):
 
 def main(argv=None) -> int:
     parser = build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in argv  # accepted before or after the verb
+    argv = [a for a in argv if a != "--debug"]
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)
         return 2
+    debug = debug or os.environ.get("HDSIM_DEBUG", "") not in ("", "0")
     try:
         return int(args.func(args) or 0)
     except (InputError, SolverError) as exc:
-        print(f"hdsim {args.verb}: error: {exc}", file=sys.stderr)
+        if debug:
+            raise
+        print(f"hdsim {args.verb}: error: {_one_line(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"hdsim {args.verb}: interrupted", file=sys.stderr)
         return 1
+    except Exception as exc:  # noqa: BLE001 - the program failed, not the input: say so, exit 1
+        if debug:
+            raise
+        print(f"hdsim {args.verb}: internal error: {type(exc).__name__}: {_one_line(exc)} "
+              "(this is a bug in hdsim, not in your input; run again with --debug or HDSIM_DEBUG=1 "
+              "for the traceback)", file=sys.stderr)
+        return 1
+
+
+def _one_line(exc: BaseException) -> str:
+    """The message of ``exc`` on one line (a traceback never reaches the user)."""
+    return " ".join(str(exc).split()) or type(exc).__name__
 
 
 if __name__ == "__main__":  # pragma: no cover

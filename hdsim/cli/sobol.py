@@ -12,7 +12,6 @@ Examples::
 from __future__ import annotations
 
 import json
-import sys
 import time
 from pathlib import Path
 
@@ -71,17 +70,15 @@ def run(args) -> int:
     target = _float(args.target_width, "--target-width") if args.target_width else None
     if args.resume and not args.out:
         raise InputError("--resume needs --out STUDY.h5")
-    try:
-        func, problem, output, model, analytic = _resolve(args, models)
-        with open_executor(args.executor, workers) as executor:
-            result = run_study(func, problem, n, seed=seed, second_order=args.second_order,
-                               replicates=reps, executor=executor, workers=workers,
-                               chunksize=chunksize, out=args.out, resume=args.resume,
-                               retry_failed=args.retry_failed, target_width=target,
-                               model=model)
-    except RuntimeError as exc:  # model failing everywhere, nominal run unsolvable, broken pool
-        print(f"hdsim sobol: error: {exc}", file=sys.stderr)
-        return 1
+    # a broken model is ModelError (bad input, exit 2); anything else that fails here, a
+    # broken process pool included, is the program's failure and reaches main (exit 1)
+    func, problem, output, model, analytic = _resolve(args, models)
+    with open_executor(args.executor, workers) as executor:
+        result = run_study(func, problem, n, seed=seed, second_order=args.second_order,
+                           replicates=reps, executor=executor, workers=workers,
+                           chunksize=chunksize, out=args.out, resume=args.resume,
+                           retry_failed=args.retry_failed, target_width=target,
+                           model=model)
     summary = result.to_json(output)
     summary["seconds"] = round(time.perf_counter() - t0, 3)
     summary.update(_extras(args, model, analytic, problem.names, result))

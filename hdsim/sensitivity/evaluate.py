@@ -20,8 +20,16 @@ from hdsim.errors import InputError
 from hdsim.sensitivity.design import fingerprint
 
 
-class ModelError(RuntimeError):
-    """The model failed on every row tried so far: most likely a bug, not physics."""
+class ModelError(InputError):
+    """The model is broken, not the physics: it raised a programming error, or failed on
+    every row tried so far. It is the user's model that fails, so the command line
+    reports it as bad input (exit status 2) with the first failure."""
+
+
+#: exceptions that mean the model's code is wrong, whatever the row: abort at once instead
+#: of filling the study with failed rows
+PROGRAMMING_ERRORS = ("TypeError", "AttributeError", "NameError", "ImportError", "SyntaxError",
+                      "NotImplementedError")
 
 
 @dataclass
@@ -65,10 +73,20 @@ def run_chunk(func, x):
             try:
                 y[i] = _call(func, x[i:i + 1])[0]
             except Exception as exc:  # noqa: BLE001
-                errors[i] = f"{type(exc).__name__}: {exc}".splitlines()[0][:300]
+                errors[i] = f"{_error_name(exc)}: {exc}".splitlines()[0][:300]
     for i in np.flatnonzero(~np.isfinite(y)):
         errors.setdefault(int(i), f"non-finite output ({y[i]})")
     return y, key, errors, count
+
+
+def _error_name(exc: BaseException) -> str:
+    """The exception's class name, or the programming-error base it derives from (numpy's
+    ``UFuncNoLoopError`` is a ``TypeError``), so the parent process can tell a bug in the
+    model from a row whose physics failed."""
+    for base in (TypeError, AttributeError, NameError, ImportError, SyntaxError, NotImplementedError):
+        if isinstance(exc, base):
+            return base.__name__
+    return type(exc).__name__
 
 
 def _call(func, x):
@@ -83,13 +101,51 @@ def default_chunksize(n_rows: int) -> int:
     return int(np.clip(n_rows // 64, 8, 512))
 
 
-def local_pool(workers: int):
-    """A process pool of ``workers`` with the platform's default start method.
+def _die_with_parent(parent: int) -> None:
+    """Worker initializer: end this worker as soon as the study process is gone.
 
-    (fork on Linux up to Python 3.13, so models defined in a notebook or a script
-    read from stdin still reach the workers).
+    A study killed with SIGKILL (the OOM killer, a batch scheduler) cannot shut its pool
+    down; orphaned workers would live on and hold the study file through the descriptor
+    they inherited at fork, so ``--resume`` would find it open. On Linux the kernel sends
+    the worker SIGKILL when its parent dies (``PR_SET_PDEATHSIG``); elsewhere a daemon
+    thread checks the parent every 0.2 s.
     """
-    return cf.ProcessPoolExecutor(max_workers=workers)
+    import os
+    import threading
+
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+            import signal
+
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # PR_SET_PDEATHSIG = 1
+        except (OSError, AttributeError):  # pragma: no cover - no prctl: the thread below covers it
+            pass
+    if os.getppid() != parent:  # the parent died between fork and prctl
+        os._exit(1)
+
+    def watch():
+        import time
+
+        while os.getppid() == parent:
+            time.sleep(0.2)
+        os._exit(1)
+
+    threading.Thread(target=watch, daemon=True, name="hdsim-parent-watch").start()
+
+
+def local_pool(workers: int):
+    """A process pool of ``workers`` whose workers die with the study process.
+
+    The platform's default start method is kept (fork on Linux up to Python 3.13, so
+    models defined in a notebook or a script read from stdin still reach the workers);
+    `_die_with_parent` ends every worker when the study process is killed.
+    """
+    import os
+
+    return cf.ProcessPoolExecutor(max_workers=workers, initializer=_die_with_parent,
+                                  initargs=(os.getpid(),))
 
 
 @contextlib.contextmanager
@@ -253,6 +309,10 @@ def _collect(out, s, e, result, rows, on_chunk, bar):
 
 
 def _abort_if_all_failed(out, rows):
+    for position, message in out.failures.items():
+        if message.split(":", 1)[0] in PROGRAMMING_ERRORS:
+            raise ModelError(f"the model raised {message} (row {rows[position]}): a bug in the model, "
+                             "not its physics; fix it, then rerun with --resume --retry-failed")
     done = out.completed
     # Judge only once a few hundred rows are in; a whole failing region is possible.
     if done >= min(len(out.y), 256) and len(out.failures) >= done:

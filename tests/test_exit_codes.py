@@ -1,0 +1,70 @@
+"""Exit status means something: 2 for bad input only, 1 for a failure of the program.
+
+The program's own failure is reported in one line that says so and how to get the
+traceback (``--debug`` or ``HDSIM_DEBUG=1``); a model that raises a programming error
+ends a study at once, as bad input, instead of filling it with failed rows.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hdsim.cli import main
+from hdsim.sensitivity import ModelError, evaluate
+
+
+def test_bad_input_is_exit_2_with_one_line(capsys):
+    assert main(["simulate", "no_such_scenario_anywhere", "--json"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("hdsim simulate: error:")
+
+
+def test_a_failure_of_the_program_is_exit_1_and_says_so(capsys, monkeypatch):
+    import hdsim.cli.units as units_verb
+
+    def broken(args):
+        raise ZeroDivisionError("division by zero deep inside")
+
+    monkeypatch.setattr(units_verb, "main", broken)
+    monkeypatch.delenv("HDSIM_DEBUG", raising=False)
+    parser_main = main
+    assert parser_main(["units"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert "internal error: ZeroDivisionError" in err[0] and "--debug" in err[0]
+
+
+@pytest.mark.parametrize("how", ["flag", "env"])
+def test_debug_shows_the_traceback(capsys, monkeypatch, how):
+    import hdsim.cli.units as units_verb
+
+    def broken(args):
+        raise ZeroDivisionError("boom")
+
+    monkeypatch.setattr(units_verb, "main", broken)
+    argv = ["units"]
+    if how == "flag":
+        argv.append("--debug")
+    else:
+        monkeypatch.setenv("HDSIM_DEBUG", "1")
+    with pytest.raises(ZeroDivisionError):
+        main(argv)
+
+
+class _BuggyModel:
+    """A user's model with a bug: every row raises TypeError."""
+
+    calls = 0
+
+    def __call__(self, X):
+        type(self).calls += len(X)
+        return X[:, 0] + "a string"
+
+
+def test_a_model_bug_ends_the_study_at_the_first_chunk():
+    X = np.random.default_rng(0).uniform(size=(2048, 3))
+    _BuggyModel.calls = 0
+    with pytest.raises(ModelError, match="TypeError"):
+        evaluate(_BuggyModel(), X, workers=1, chunksize=16)
+    assert _BuggyModel.calls < 64  # one chunk and its row-by-row isolation, not 256 rows
