@@ -109,11 +109,12 @@ def test_main_process_killed_workers_die_and_study_resumes_at_once(tmp_path):
     and no finished row evaluated twice."""
     psutil = pytest.importorskip("psutil")
     (tmp_path / "slowmodel.py").write_text(SLOW_MODEL)
-    total = 256 * 5
-    ref = _run(tmp_path, tmp_path / "ref.h5", tmp_path / "ref.log", sleep=0.0)
+    small = ["--n", "128"]  # after ARGS' --n 256: argparse keeps the last
+    total = 128 * 5
+    ref = _run(tmp_path, tmp_path / "ref.h5", tmp_path / "ref.log", extra=small, sleep=0.0)
 
     out, log = tmp_path / "cut.h5", tmp_path / "cut.log"
-    proc = _run(tmp_path, out, log, wait=False, sleep=0.006)
+    proc = _run(tmp_path, out, log, extra=small, wait=False, sleep=0.006)
     deadline = time.time() + 60
     while len(_lines(log)) < total // 3 and time.time() < deadline and proc.poll() is None:
         time.sleep(0.02)
@@ -136,7 +137,7 @@ def test_main_process_killed_workers_die_and_study_resumes_at_once(tmp_path):
     rows, status = _rows_hex(out)
     done_at_kill = {rows[i] for i in np.flatnonzero(status == DONE)}
     before = _lines(log)
-    resumed = _run(tmp_path, out, log, extra=["--resume"], sleep=0.0)  # within the second
+    resumed = _run(tmp_path, out, log, extra=[*small, "--resume"], sleep=0.0)  # within the second
     after = _lines(log)[len(before):]
     assert not set(after) & done_at_kill, "a finished row was evaluated again"
     for key in ("S1", "ST", "S1_conf", "ST_conf"):
