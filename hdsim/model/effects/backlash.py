@@ -82,13 +82,6 @@ class NoBacklash(Backlash):
     id: ClassVar[str] = "none"
     is_null: ClassVar[bool] = True
 
-    def free_parameters(self, context):
-        return ()
-
-    @classmethod
-    def neutral(cls):
-        return cls()
-
 
 @dataclass(frozen=True, eq=False)
 class DeadZoneBacklash(Backlash):

@@ -89,9 +89,11 @@ class Effect(Parameters):
     def free_parameters(self, context: FitContext) -> tuple[FreeParameter, ...]:
         """The parameters a fit frees, with bounds and start values from ``context``.
 
-        Default: every numeric field within its physical bounds, started from the
-        effect's current value.
+        Default: nothing for a "no effect", else every numeric field within its physical
+        bounds, started from the effect's current value.
         """
+        if self.is_null:
+            return ()
         out = []
         for name, meta in self.param_meta().items():
             lower, upper = meta["bounds"]
@@ -114,7 +116,9 @@ class Effect(Parameters):
     @classmethod
     def neutral(cls) -> "Effect":
         """An instance that acts exactly as "no effect" (used to stack models that
-        lack the family into one batch with models that have it)."""
+        lack the family into one batch with models that have it); a "no effect" is its own."""
+        if cls.is_null:
+            return cls()
         raise NotImplementedError(f"{cls.family} effect '{cls.id}' declares no neutral values")
 
     @classmethod

@@ -35,13 +35,6 @@ class NoDamping(Damping):
     id: ClassVar[str] = "none"
     is_null: ClassVar[bool] = True
 
-    def free_parameters(self, context):
-        return ()
-
-    @classmethod
-    def neutral(cls):
-        return cls()
-
 
 @dataclass(frozen=True, eq=False)
 class ViscousDamping(Damping):

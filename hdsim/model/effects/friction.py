@@ -141,13 +141,6 @@ class NoFriction(Friction):
     id: ClassVar[str] = "none"
     is_null: ClassVar[bool] = True
 
-    def free_parameters(self, context):
-        return ()
-
-    @classmethod
-    def neutral(cls):
-        return cls()
-
 
 class _DahlLaw(Friction):
     """Shared Dahl torque law ``dz/de = σ (1 − z/F sgn ė)`` (Dahl, 1968), state z [N·m]."""

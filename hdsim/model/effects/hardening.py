@@ -52,12 +52,6 @@ class NoHardening(Hardening):
         k = 1.0 / (c_struct + c_mesh)
         return lambda twist: (k * twist, k)
 
-    def free_parameters(self, context):
-        return ()
-
-    @classmethod
-    def neutral(cls):
-        return cls()
 
 
 @dataclass(frozen=True, eq=False)

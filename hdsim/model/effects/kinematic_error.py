@@ -52,12 +52,6 @@ class NoKinematicError(KinematicError):
     def displacement_and_partials(self, wg_angle, output_angle, load_fraction):
         return 0.0, 0.0, 0.0, 0.0
 
-    def free_parameters(self, context):
-        return ()
-
-    @classmethod
-    def neutral(cls):
-        return cls()
 
 
 def _per_sample(value):
