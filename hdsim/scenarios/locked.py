@@ -42,6 +42,7 @@ def check(data: dict, source: str) -> None:
         raise InputError(f"{source}: load.amplitude must be in (0, 5] (fraction of T_N)")
     if load["cycles"] < 1 or load["rate"] <= 0:
         raise InputError(f"{source}: load.cycles must be >= 1 and load.rate > 0")
+    _check_size(load, int(data.get("output", {}).get("samples_per_segment", 100)), source)
     if "lost_motion_centre_line" in data.get("metrics", []) and load["amplitude"] <= 0.04:
         raise InputError(f"{source}: lost_motion_centre_line reads the loop between ±4 % T_N and needs "
                          f"load.amplitude above 0.04 (it is {load['amplitude']:g})")
@@ -66,6 +67,33 @@ def breakpoints(model: HarmonicDrive):
         return catalog["T1"], catalog["T2"]
     raise InputError("stiffness metrics need breakpoints T1, T2: use a catalog unit or "
                      "a three_segment hardening effect")
+
+
+#: the largest locked-WG test accepted. A catalog test is a few cycles of seconds with a
+#: few hundred samples per ramp; these bounds are thousands of times that, yet refuse a
+#: file that would allocate gigabytes or step through gap crossings for hours, before
+#: anything is allocated.
+MAX_SAMPLES = 5_000_000
+MAX_CYCLES = 1_000
+MAX_DURATION_S = 1e5
+
+
+def _check_size(load: dict, samples_per_segment: int, source: str) -> None:
+    """Refuse a torque cycle too large to run, with the estimate and the limit."""
+    cycles = load["cycles"]
+    duration = 4.0 * load["amplitude"] * cycles / load["rate"]  # |ΔL| sums to 4·A·cycles
+    samples = (2 * cycles + 1) * samples_per_segment + 1
+    if samples_per_segment < 2:
+        raise InputError(f"{source}: output.samples_per_segment must be at least 2, got {samples_per_segment}")
+    if cycles > MAX_CYCLES:
+        raise InputError(f"{source}: load.cycles = {cycles} (limit {MAX_CYCLES}): each cycle crosses the "
+                         "dead zone twice and costs the solver ~100 steps")
+    if samples > MAX_SAMPLES:
+        raise InputError(f"{source}: the scenario asks for {samples:.3g} output samples (limit {MAX_SAMPLES:.0e}): "
+                         "lower output.samples_per_segment or load.cycles")
+    if duration > MAX_DURATION_S:
+        raise InputError(f"{source}: the cycle would last {duration:.3g} s of bench time (limit "
+                         f"{MAX_DURATION_S:.0e} s): raise load.rate or lower load.cycles")
 
 
 def run_locked(model: HarmonicDrive, scenario, *, samples_per_segment: int | None = None,
