@@ -16,16 +16,23 @@ NAMES = ["h_pz", "h_c", "R_v", "R_k", "h_p"]
 
 
 def test_batched_rows_match_individual_runs():
+    """A batch integrates each row as a single run would: at the default rtol 1e-6 the rows
+    agree with single runs to 1e-5; the study's own function (rtol 1e-4, whose global error
+    on this metric was measured at 2-4e-4 against rtol 1e-8) agrees to 1e-3."""
     f = model_function("CSG-25-100", NAMES, "lost_motion_arcmin")
     nominal = np.array(list(nominal_values("CSG-25-100", NAMES).values()))
     rng = np.random.default_rng(3)
     X = nominal * (1 + 0.1 * (2 * rng.random((2, 5)) - 1))
-    batched = f(X)
+    study_values = f(X)
     scenario = load_scenario(builtin_scenario_path("lost_motion"))
-    for row, value in zip(X, batched):
+    tight = SolverOptions(rtol=1e-6, atol_scale=1e-6)
+    batch = load_unit().with_updates({f"flexspline.{n}": X[:, i] for i, n in enumerate(NAMES)})
+    batched = run_scenario(batch, scenario, options=tight).metrics["lost_motion_arcmin"]
+    for row, value, study_value in zip(X, batched, study_values):
         model = load_unit().with_updates({f"flexspline.{n}": v for n, v in zip(NAMES, row)})
-        single = run_scenario(model, scenario, options=SolverOptions(rtol=1e-6, atol_scale=1e-6))
-        assert value == pytest.approx(single.metric("lost_motion_arcmin"), rel=2e-4)
+        single = run_scenario(model, scenario, options=tight).metric("lost_motion_arcmin")
+        assert value == pytest.approx(single, rel=1e-5)
+        assert study_value == pytest.approx(single, rel=1e-3)
 
 
 def test_impossible_rows_are_nan_and_do_not_spoil_the_batch():

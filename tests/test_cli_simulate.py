@@ -135,9 +135,6 @@ def test_batch_result_round_trip(tmp_path):
     assert stored.model.friction.id == "none" and stored.model.hardening.id == model.hardening.id
 
 
-@pytest.mark.xfail(strict=True, reason="BlockDiagonalRadau (batches of M > 1) is 0.3 % off at the default "
-                   "rtol 1e-6 (3 % at the studies' 1e-4) on a unit without friction and backlash; scipy "
-                   "Radau (M = 1), BDF and LSODA agree with the closed form to 1e-5. Reported to the lead.")
 def test_batch_rows_are_their_own_elastic_closed_forms():
     """Each sample of a batch is the elastic closed form 2A/K(h_pz) of its own geometry,
     as a single run is (solver rtol 1e-6: agreement to 1e-4 expected)."""
