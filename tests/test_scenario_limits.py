@@ -36,3 +36,58 @@ def test_absurd_sizes_are_refused_with_the_estimate(data, match, monkeypatch):
 
 def test_a_catalog_test_is_far_inside_the_limits():
     Scenario(_locked(cycles=3, rate=0.04), "ok.toml")
+
+
+@pytest.fixture
+def no_solver(monkeypatch):
+    """The refusal must come before any integration: the solver raises if it is reached."""
+    import hdsim.simulation.solver as solver
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the solver was called")
+
+    monkeypatch.setattr(solver, "solve_ivp", refuse)
+
+
+@pytest.mark.parametrize("updates, match", [
+    ({"input.output_revolutions": 1e5}, "bench time"),            # a typo in the travel: days of bench time
+    ({"output.sample_rate_Hz": 1e8}, "output samples"),            # 26 s at 100 MHz
+    ({"solver.max_step": 1e-9}, "solver steps"),                   # a step bound of a nanosecond
+])
+def test_absurd_driven_runs_are_refused_with_the_estimate(updates, match, no_solver):
+    from hdsim.model.catalog import load_unit
+    from hdsim.scenarios.run import run_scenario
+    from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario
+
+    scenario = load_scenario(builtin_scenario_path("kinematic_error")).with_updates(updates)
+    with pytest.raises(InputError, match=match) as info:
+        run_scenario(load_unit(), scenario)
+    assert "limit" in str(info.value) and "\n" not in str(info.value)
+
+
+def test_a_batch_too_large_for_memory_is_refused_before_it_runs(no_solver):
+    """Each sample alone is within the limits; 2,000 of them at once are not."""
+    import numpy as np
+
+    from hdsim.model.catalog import load_unit
+    from hdsim.scenarios.run import run_scenario
+
+    scenario = Scenario(dict(_locked(cycles=5), output={"samples_per_segment": 1000}), "big.toml")
+    batch = load_unit().with_updates({"flexspline.h_c": np.full(2000, 0.6e-3)})
+    with pytest.raises(InputError, match="parameter sets"):
+        run_scenario(batch, scenario)
+
+
+def test_the_shipped_scenarios_are_far_inside_the_limits():
+    """Every shipped scenario asks for under a tenth of each limit."""
+    from hdsim.model.catalog import load_unit
+    from hdsim.scenarios import limits
+    from hdsim.scenarios.driven import bench_from_scenario
+    from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario
+    from hdsim.simulation.solver import SolverOptions, step_schedule
+
+    for name in ("kinematic_error", "constant_speed", "frequency_sweep", "point_to_point", "reversal"):
+        bench = bench_from_scenario(load_unit(), load_scenario(builtin_scenario_path(name)))
+        steps = sum((b - a) / o.max_step for a, b, o in step_schedule(bench, SolverOptions()))
+        assert bench.t_end * bench.sample_rate < limits.MAX_SAMPLES / 10
+        assert steps < limits.MAX_SOLVER_STEPS / 10

@@ -21,6 +21,7 @@ from hdsim.model.drive import HarmonicDrive
 from hdsim.model.input_friction import for_unit
 from hdsim.scenarios.driven_metrics import DRIVEN_METRICS, driven_metrics
 from hdsim.scenarios.driven_schema import DRIVEN_REQUIRED, DRIVEN_SCHEMA
+from hdsim.scenarios.limits import refuse_if_too_large
 from hdsim.scenarios.profile_csv import read_profile_csv
 from hdsim.scenarios.setups import Setup
 from hdsim.simulation.controller import PIController
@@ -221,9 +222,14 @@ def run_driven(model: HarmonicDrive, scenario, *, samples_per_segment: int | Non
     if samples_per_segment:
         scenario = scenario.with_updates({"output.samples_per_wg_rev": int(samples_per_segment)})
     bench = bench_from_scenario(model, scenario)
+    schedule = step_schedule(bench, options or SolverOptions())
+    refuse_if_too_large(scenario.source, samples=np.ceil(bench.t_end * bench.sample_rate) + 1, duration=bench.t_end,
+                        batch=model.batch_size, min_steps=sum((b - a) / o.max_step for a, b, o in schedule),
+                        set_by="the input and load durations (revolutions, speeds, dwell, hold and sweep "
+                               "times) and the output sampling")
     system = bench.system(model)
     t_eval = bench.sample_times()
-    result = integrate_segments(system, step_schedule(bench, options or SolverOptions()), t_eval)
+    result = integrate_segments(system, schedule, t_eval)
     result.metadata.update(windows={k: [float(a), float(b)] for k, (a, b) in bench.motion.windows.items()},
                            input_mode=bench.mode, profile=bench.motion.description)
     metrics = driven_metrics(model, scenario, bench, result)

@@ -12,6 +12,7 @@ import numpy as np
 
 from hdsim.errors import InputError
 from hdsim.model.drive import HarmonicDrive
+from hdsim.scenarios.limits import refuse_if_too_large
 from hdsim.scenarios.locked_metrics import METRIC_GROUPS, locked_metrics
 from hdsim.scenarios.setups import Setup
 from hdsim.simulation.path import locked_wave_generator
@@ -69,31 +70,29 @@ def breakpoints(model: HarmonicDrive):
                      "a three_segment hardening effect")
 
 
-#: the largest locked-WG test accepted. A catalog test is a few cycles of seconds with a
-#: few hundred samples per ramp; these bounds are thousands of times that, yet refuse a
-#: file that would allocate gigabytes or step through gap crossings for hours, before
-#: anything is allocated.
-MAX_SAMPLES = 5_000_000
+#: more cycles than anyone measures; each crosses the dead zone twice at ~100 solver steps
+#: (the other size limits are shared with the driven bench, `hdsim.scenarios.limits`)
 MAX_CYCLES = 1_000
-MAX_DURATION_S = 1e5
 
 
 def _check_size(load: dict, samples_per_segment: int, source: str) -> None:
     """Refuse a torque cycle too large to run, with the estimate and the limit."""
     cycles = load["cycles"]
-    duration = 4.0 * load["amplitude"] * cycles / load["rate"]  # |ΔL| sums to 4·A·cycles
-    samples = (2 * cycles + 1) * samples_per_segment + 1
     if samples_per_segment < 2:
         raise InputError(f"{source}: output.samples_per_segment must be at least 2, got {samples_per_segment}")
     if cycles > MAX_CYCLES:
         raise InputError(f"{source}: load.cycles = {cycles} (limit {MAX_CYCLES}): each cycle crosses the "
                          "dead zone twice and costs the solver ~100 steps")
-    if samples > MAX_SAMPLES:
-        raise InputError(f"{source}: the scenario asks for {samples:.3g} output samples (limit {MAX_SAMPLES:.0e}): "
-                         "lower output.samples_per_segment or load.cycles")
-    if duration > MAX_DURATION_S:
-        raise InputError(f"{source}: the cycle would last {duration:.3g} s of bench time (limit "
-                         f"{MAX_DURATION_S:.0e} s): raise load.rate or lower load.cycles")
+    refuse_if_too_large(source, samples=_samples(cycles, samples_per_segment), duration=_duration(load),
+                        set_by="load.cycles, load.rate and output.samples_per_segment")
+
+
+def _samples(cycles: int, samples_per_segment: int) -> int:
+    return (2 * cycles + 1) * samples_per_segment + 1
+
+
+def _duration(load: dict) -> float:
+    return 4.0 * load["amplitude"] * load["cycles"] / load["rate"]  # |ΔL| sums to 4·A·cycles [s]
 
 
 #: steps per torque ramp that bound the solver's step when the options set no ``max_step``.
@@ -134,10 +133,15 @@ def run_locked(model: HarmonicDrive, scenario, *, samples_per_segment: int | Non
         (scenario, `hdsim.simulation.solver.SimulationResult`, metrics ``{name: (M,)}``).
     """
     n = samples_per_segment or scenario.samples_per_segment
+    options = ramp_step_bound(scenario, options)
+    duration = _duration(scenario.data["load"])
+    refuse_if_too_large(scenario.source, samples=_samples(scenario.data["load"]["cycles"], n), duration=duration,
+                        batch=model.batch_size, min_steps=duration / options.max_step,
+                        set_by="load.cycles, load.rate and output.samples_per_segment")
     rated = model.drive.rated_torque
     system = locked_wave_generator(model, scenario.torque_profile(rated))
     t_eval = scenario.sample_times(n)
-    result = integrate(system, (t_eval[0], t_eval[-1]), t_eval, ramp_step_bound(scenario, options))
+    result = integrate(system, (t_eval[0], t_eval[-1]), t_eval, options)
     T1, T2 = breakpoints(model) if "stiffness" in scenario.metrics else (np.nan, np.nan)
     metrics = locked_metrics(scenario.metrics, result.signals["torque_Nm"], result.signals["twist_rad"],
                              scenario.levels(), n, T1, T2, rated)
