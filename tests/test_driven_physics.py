@@ -337,3 +337,17 @@ def test_rigid_limit_full_length(name):
     s = run.result.signals
     N = float(model.drive.ratio)
     assert np.max(np.abs(s["output_angle_rad"][0] - s["wg_angle_rad"][0] / N)) < 1e-8
+
+
+@pytest.mark.parametrize("scenario, updates", [
+    ("reversal", {}),                                            # PI loop: the output lags the command
+    ("kinematic_error", {"input.output_revolutions": 0.05}),     # prescribed: it rings through the reversal
+])
+def test_the_brake_only_takes_energy_out(scenario, updates):
+    """An opposing load brakes the output's actual motion, so its power T_L·ω_o is never
+    positive. Braking on the commanded speed, it fed energy in where the output still
+    turned the old way after the command reversed (up to 1.5 W on the contract run)."""
+    s = run_scenario(load_unit(), shipped(scenario, **updates)).result.signals
+    power = s["load_torque_Nm"][0] * s["output_speed_rad_per_s"][0]
+    assert power.max() <= 0.0
+    assert power.min() < -0.1  # it does brake

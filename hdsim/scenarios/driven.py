@@ -140,7 +140,7 @@ def bench_from_scenario(model: HarmonicDrive, scenario) -> Bench:
         cruise = motion.max_speed
         if cruise == 0.0:
             raise InputError(f"{src}: an opposing load needs a moving input profile")
-        load = opposing_load(abs(torque) * TN, motion, _positive(ld, "smoothing", 0.05, src) * cruise)
+        load = opposing_load(abs(torque) * TN, motion, _positive(ld, "smoothing", 0.05, src) * cruise, N)
     elif load_kind == "step":
         step_time = _positive(ld, "step_time_s", 0.2, src)
         load = step_load(torque * TN, float(ld.get("step_to", 0.5)) * TN, load_ramp, step_time,

@@ -22,14 +22,15 @@ WG shaft, so a conservative drive conserves energy exactly, kinematic error
 included (the ``e_w``, ``e_o`` terms are the instantaneous ratio ripple; the plain
 ``−τ``, ``+τ/N`` are their e = 0 limit)::
 
-    (J_out + J_load) ω̇_o = T_L(t) − τ (1 − e_o)
+    (J_out + J_load) ω̇_o = T_L(t, ω_o) − τ (1 − e_o)
     J_in ω̇_w             = T_m − T_f(ω_w, θ_w) + τ (1/N + e_w)
 
 Efficiency under load (mesh losses growing with torque) is not modelled; the WG
 shaft friction (`hdsim.model.input_friction`) is the only input-side loss. The
-load-dependence of the kinematic error follows the *applied* load ``T_L(t)`` (known
-in time, equal to the drive torque at steady state), which avoids an algebraic loop
-between τ and e.
+load-dependence of the kinematic error follows the load as a function of time
+``T_L(t)`` (equal to the drive torque at steady state), which avoids an algebraic loop
+between τ and e; a brake (`hdsim.simulation.loads.opposing_load`) applies its torque
+at the output's actual speed, ``T_L(t)`` being its value along the commanded motion.
 
 Input modes:
 
@@ -176,8 +177,8 @@ def driven_wave_generator(model: HarmonicDrive, motion: Motion, load: Load = NO_
         q, qd = x[iq], x[iq + 1]
         th_o = th_w / N + q
         w_o = w_w / N + qd
-        T_L = load.torque(t)
-        frac = T_L / TN
+        T_t = load.torque(t)  # the load as a function of time, which the kinematic error follows
+        frac = T_t / TN
         e, e_w, e_o, e_f = ke(th_w, th_o, frac)
         frac_rate = load.rate(t) / TN
         delta = q - e
@@ -186,6 +187,7 @@ def driven_wave_generator(model: HarmonicDrive, motion: Motion, load: Load = NO_
         tau, rates, hyst = path.evaluate(delta, delta_rate, fstates)
         out_force = tau * (1.0 - e_o)
         wg_force = tau * (1.0 / N + e_w)
+        T_L = T_t if load.at_output_speed is None else load.at_output_speed(w_o)  # a brake: actual speed
         acc_o = (T_L - out_force) / J_out
         T_f = fr.torque(w_w, th_w) if friction_on else 0.0 * w_w
         w_cmd = None

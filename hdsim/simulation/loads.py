@@ -38,6 +38,12 @@ class Load:
     frequency_schedule : list
         ``[(t_start [s], t_end [s], highest frequency in the load [Hz])]`` covering the
         run (a sweep's octaves): bounds the solver's step, `hdsim.simulation.solver.step_schedule`.
+    at_output_speed : callable or None
+        For a load that depends on how the output actually moves (a brake):
+        ``at_output_speed(ω_o)`` is the torque it applies [N·m] at output speed ω_o
+        [rad/s]. ``torque`` and ``rate`` are then its values along the commanded motion,
+        which the load-dependent kinematic error follows (known in time, and equal at
+        steady state). None: the load is ``torque(t)`` whatever the output does.
     """
 
     torque: Callable
@@ -47,6 +53,7 @@ class Load:
     operating_point: float | None = None
     sweep_start: float = 0.0
     frequency_schedule: list = field(default_factory=list)
+    at_output_speed: Callable | None = None
 
 
 def per_sample(x):
@@ -125,28 +132,42 @@ def ramped_load(torque, ramp_s) -> Load:
     return Load(value, rate)
 
 
-def opposing_load(torque, motion, smoothing_speed) -> Load:
-    """A load that opposes the commanded direction, ``−T tanh(ω_ref / ω_s)`` (a brake).
+def opposing_load(torque, motion, smoothing_speed, ratio) -> Load:
+    """A brake on the output: ``−T tanh(|N| ω_o / ω_s)``, opposing the output's actual motion.
+
+    The brake acts on the output's own speed ω_o, so its power ``T_L ω_o`` is never
+    positive: it only takes energy out, also while the output lags, overshoots or rings
+    through a reversal of the command, and whatever the sign of the ratio. Its value along
+    the commanded motion, ``−T tanh(|N| (ω_ref / N) / ω_s)``, is the known-in-time load
+    the load-dependent kinematic error follows (`Load.at_output_speed`).
 
     Parameters
     ----------
     torque : float or array_like
         Magnitude T [N·m], per sample.
     motion : hdsim.simulation.motion.Motion
-        The commanded WG motion (its speed ω_ref [rad/s] sets the sign).
+        The commanded WG motion (speed ω_ref [rad/s]).
     smoothing_speed : float
-        ω_s [rad/s]: the sign switches over about this speed.
+        ω_s, a WG speed [rad/s]: the sign switches over about this speed.
+    ratio : float
+        Transmission ratio N (negative when the output turns the other way).
     """
     T = per_sample(torque)
+    gain = abs(ratio) / smoothing_speed  # output speed -> argument of tanh
+
+    def at_output_speed(w_o):
+        if isinstance(w_o, float) and isinstance(T, float):
+            return -T * math.tanh(gain * w_o)  # the solver's scalar path
+        return -np.tanh(gain * np.asarray(w_o)) * T
 
     def value(t):
-        return _outer(-np.tanh(motion.speed(t) / smoothing_speed), T)
+        return _outer(-np.tanh(gain * motion.speed(t) / ratio), T)
 
     def rate(t):
-        x = motion.speed(t) / smoothing_speed
-        return _outer(-(1.0 - np.tanh(x) ** 2) * motion.accel(t) / smoothing_speed, T)
+        x = gain * motion.speed(t) / ratio
+        return _outer(-(1.0 - np.tanh(x) ** 2) * gain * motion.accel(t) / ratio, T)
 
-    return Load(value, rate)
+    return Load(value, rate, at_output_speed=at_output_speed)
 
 
 def step_load(initial, final, ramp_s, step_time, rise_s) -> Load:
