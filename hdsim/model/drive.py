@@ -15,7 +15,7 @@ from typing import ClassVar
 import numpy as np
 
 from hdsim.model import effects as fx
-from hdsim.model.parameters import Parameters, param
+from hdsim.model.parameters import Parameters, _as_float_array, param
 from hdsim.errors import InputError, unknown_name
 from hdsim.model.geometry import FlexsplineGeometry
 from hdsim.physics import compliance as cc
@@ -206,6 +206,10 @@ class HarmonicDrive:
             if name not in known:
                 raise unknown_name("parameter", name, known)
             prefix, _, attr = name.partition(".")
+            if isinstance(value, (list, tuple, np.ndarray)):  # a batch: the parameter holders compute on arrays
+                value = _as_float_array(prefix, attr, value)
+                if value.size == 0:
+                    raise InputError(f"{name} is an empty array; expected a number or a 1-D array of values")
             grouped.setdefault(prefix, {})[attr] = value
         changes = {}
         for prefix, values in grouped.items():

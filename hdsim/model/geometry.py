@@ -170,8 +170,8 @@ def validate_geometry(g: FlexsplineGeometry) -> None:
             _fail(f"{name} must be a positive finite number, got {np.atleast_1d(v)[i]:g} {_unit(name)}",
                   i, batched)
     def fmt(x, i):
-        x = np.atleast_1d(x)
-        return f"{x[min(i, x.size - 1)] * 1e3:.4g} mm"
+        x = float(np.atleast_1d(x)[min(i, np.size(x) - 1)])
+        return f"{x * 1e3:.4g} mm" if abs(x) < 1e300 else f"{x:.4g} m"  # 1e3·x would overflow (a warning)
 
     checks = [
         (g.h_p >= g.h_pz, lambda i: f"undercut depth h_p = {fmt(g.h_p, i)} must be less than the "

@@ -62,15 +62,22 @@ class InputFriction:
     ripple_phases: tuple = ()
 
     def __post_init__(self):
+        # NaN fails every comparison, so "not >= 0" refuses it; inf is refused by name
         for name in ("starting_torque", "coulomb_torque", "viscous"):
-            if not np.all(np.asarray(getattr(self, name), dtype=float) >= 0.0):
-                raise InputError(f"input_friction.{name} must be >= 0")
+            value = np.asarray(getattr(self, name), dtype=float)
+            if not np.all((value >= 0.0) & (value < np.inf)):
+                raise InputError(f"input_friction.{name} must be a finite number >= 0")
         for name in ("stribeck_speed", "velocity_scale"):
-            if not np.all(np.asarray(getattr(self, name), dtype=float) > 0.0):
-                raise InputError(f"input_friction.{name} must be > 0")
+            value = np.asarray(getattr(self, name), dtype=float)
+            if not np.all((value > 0.0) & (value < np.inf)):
+                raise InputError(f"input_friction.{name} must be a finite number > 0")
         if not len(self.ripple_orders) == len(self.ripple_amplitudes) == len(self.ripple_phases):
             raise InputError("input_friction ripple_orders, ripple_amplitudes and ripple_phases "
                              "must have the same length")
+        ripple = [*self.ripple_orders, *self.ripple_amplitudes, *self.ripple_phases]
+        if not np.all(np.isfinite(np.asarray(ripple, dtype=float))):
+            raise InputError("input_friction ripple_orders, ripple_amplitudes and ripple_phases "
+                             "must be finite numbers")
         if sum(abs(float(r)) for r in self.ripple_amplitudes) >= 1.0:
             raise InputError("input_friction: the ripple amplitudes must sum to less than 1 "
                              "(the friction level must stay positive)")

@@ -50,6 +50,9 @@ def read_profile_csv(path) -> dict[str, np.ndarray]:
         raise InputError(f"{path}: profile file not found") from None
     except (UnicodeDecodeError, IsADirectoryError):
         raise InputError(f"{path}: not a text CSV file") from None
+    except (OSError, ValueError) as exc:  # no permission; a name the system refuses (too long, a NUL byte)
+        raise InputError(f"{str(path)!r}: cannot read the profile file "
+                         f"({getattr(exc, 'strerror', None) or exc})") from None
     rows = [(n + 1, line) for n, line in enumerate(lines) if line.strip() and not line.lstrip().startswith("#")]
     if not rows:
         raise InputError(f"{path}: no header row")

@@ -60,8 +60,12 @@ class Scenario:
         object.__setattr__(self, "data", copy.deepcopy(self.data))
         if not isinstance(self.data.get("name"), str):
             raise InputError(f"{self.source}: missing 'name'")
+        if not isinstance(self.setup, str):  # checked before the look-up, which needs a name
+            raise InputError(f"{self.source}: setup must be str, got {self.setup!r}")
         setup = get_setup(self.setup, f"setup in {self.source}")
         _validate(self.data, schema_for(self.setup), self.source, "")
+        if not all(isinstance(name, str) for name in self.metrics):  # names, looked up by the runners
+            raise InputError(f"{self.source}: metrics must be a list of names, got {self.data['metrics']!r}")
         for table, keys in setup.required.items():
             for key in keys:
                 if key not in self.data.get(table, {}):
@@ -149,8 +153,11 @@ def _coerce(value, kind, key, source):
             return float(value)
         except ValueError:
             pass
-    if kind is int and isinstance(value, str) and value.strip().lstrip("-").isdigit():
-        return int(value)
+    if kind is int and isinstance(value, str):
+        try:  # int() itself decides: '--5' and '²' pass isdigit() tests but are no integers
+            return int(value)
+        except ValueError:
+            pass
     if kind in (str, list) and isinstance(value, kind):
         return value
     raise InputError(f"{source}: {key} must be {kind.__name__}, got {value!r}")
@@ -193,6 +200,9 @@ def read_toml(path, kind: str = "TOML") -> dict:
         raise InputError(f"{path}: is a directory, expected a {kind} .toml file") from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise InputError(f"{path}: not valid TOML: {exc}") from None
+    except (OSError, ValueError) as exc:  # no permission; a name the system refuses (too long, a NUL byte)
+        raise InputError(f"{str(path)!r}: cannot read the {kind} file "
+                         f"({getattr(exc, 'strerror', None) or exc})") from None
 
 
 def load_scenario(scenario) -> Scenario:
@@ -220,11 +230,15 @@ def load_scenario(scenario) -> Scenario:
     if isinstance(scenario, Scenario):
         return scenario
     path = Path(scenario)
-    if not path.is_file():
+    try:
+        is_file, exists = path.is_file(), path.exists()
+    except OSError:  # a name the system refuses (too long): read_toml says so in one line
+        is_file = exists = True
+    if not is_file:
         names = builtin_scenario_names()
         if str(scenario) in names:
             path = builtin_scenario_path(str(scenario))
-        elif not path.exists():
+        elif not exists:
             raise InputError(f"{path}: scenario file not found, nor a built-in scenario "
                              f"({', '.join(names)})")
     return Scenario(read_toml(path, "scenario"), str(path))
