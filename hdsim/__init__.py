@@ -13,7 +13,7 @@ print(run.metric("lost_motion_arcmin"))
 
 | name | what it is |
 |---|---|
-| `load_unit` | a built-in unit as a `HarmonicDrive` |
+| `load_unit` | a built-in unit, or any drive from its drive file (TOML), as a `HarmonicDrive` |
 | `HarmonicDrive` | the model: geometry, calibration, inertias and effect slots |
 | `run_scenario` | simulate a scenario (built-in name, file or `Scenario`) on a drive |
 | `load_scenario`, `Scenario` | a validated scenario |

@@ -18,7 +18,8 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("demo", help="lost-motion and stiffness tests on the default unit",
                               description="Run the catalog ±4 % T_N lost-motion test and the ±T_N "
                                           "stiffness test; write figures and HDF5 results to --out.")
-    p.add_argument("--unit", default=None, help=f"built-in unit (default {default_unit()})")
+    p.add_argument("--unit", default=None,
+                   help=f"built-in unit (default {default_unit()}) or a drive file (.toml)")
     p.add_argument("--out", default="hdsim-demo", help="output folder (default ./hdsim-demo)")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.set_defaults(func=main)
@@ -28,7 +29,7 @@ def main(args) -> int:
     """Run both tests, write their files, print the summary; exit status."""
     start = time.perf_counter()
     model = load_unit(args.unit)
-    catalog = catalog_entry(model.name)
+    catalog = dict(model.provenance.get("catalog") or catalog_entry(model.name))
     scenarios = [load_scenario(name) for name in ("lost_motion", "stiffness")]
     out = Path(args.out)
     summary, files = {}, {}

@@ -15,10 +15,12 @@ def register(subparsers) -> None:
     """Add the ``simulate`` verb."""
     p = subparsers.add_parser("simulate", help="run a scenario on a unit",
                               description="Run a scenario (a TOML file or a built-in scenario) on a "
-                                          "built-in unit; write an HDF5 result and figures to --out.")
+                                          "built-in unit or a drive file; write an HDF5 result and figures to --out.")
     p.add_argument("scenario", help="scenario file (e.g. my_test.toml) or built-in scenario name: "
                                     + ", ".join(builtin_scenario_names()))
-    p.add_argument("--unit", default=None, help="built-in unit (default CSG-25-100); see 'hdsim units'")
+    p.add_argument("--unit", default=None,
+                   help="built-in unit (default CSG-25-100; see 'hdsim units') or a drive file "
+                        "(a TOML file of datasheet figures; 'hdsim units --template')")
     _common.add_set_argument(p)
     p.add_argument("--out", default="hdsim-out", help="output folder (default ./hdsim-out)")
     p.add_argument("--no-figures", action="store_true", help="write the HDF5 result only")

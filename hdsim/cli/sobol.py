@@ -6,6 +6,8 @@ Examples::
                 --output lost_motion_arcmin --n 1024 --second-order --out study.h5 --json
     hdsim sobol --unit fitted.toml --scenario my_test.toml --params h_pz,backlash.gap \\
                 --range 10% --output lost_motion_arcmin --n 256 --json
+    hdsim sobol --unit my_drive.toml --params h_pz,h_c --range 10% \\
+                --output lost_motion_arcmin --n 256 --json
     hdsim sobol --function ishigami --n 4096 --json
 """
 
@@ -23,9 +25,10 @@ HELP = "Sobol' sensitivity study (first, total, optional second order) with chec
 def register(subparsers) -> None:
     p = subparsers.add_parser("sobol", help=HELP, description=HELP + ".")
     what = p.add_mutually_exclusive_group()
-    what.add_argument("--unit", metavar="UNIT|FIT.toml",
+    what.add_argument("--unit", metavar="UNIT|FILE.toml",
                       help="drive to study through the simulator: a built-in unit (see "
-                           "'hdsim units') or a fitted-model file written by 'hdsim fit --out'")
+                           "'hdsim units'), a drive file ('hdsim units --template') or a "
+                           "fitted-model file written by 'hdsim fit --out'")
     what.add_argument("--function", help="closed form: ishigami, gfunction or linear")
     what.add_argument("--model", metavar="MODULE:CALLABLE",
                       help="any picklable f(X) -> y importable from PYTHONPATH")
@@ -116,17 +119,30 @@ def _resolve(args, models):
 
 
 def _drive(text: str):
-    """A built-in unit name as it is; a fitted-model file as the `HarmonicDrive` it holds."""
-    from hdsim.model.catalog import unit_names
+    """A built-in unit name as it is; a fitted-model file or a drive file as the
+    `HarmonicDrive` it describes."""
+    from hdsim.model.catalog import load_unit, unit_names
 
     if text in unit_names():
         return text
     path = Path(text)
     if path.suffix.lower() == ".toml" or path.exists() or any(c in text for c in "/\\"):
-        from hdsim.identification.fit import load_fitted
+        if _is_fit_file(path):
+            from hdsim.identification.fit import load_fitted
 
-        return load_fitted(path)  # a missing or foreign file is one InputError line
+            return load_fitted(path)  # a foreign fit file is one InputError line
+        return load_unit(path)  # a drive file; a missing or bad file is one InputError line
     return text  # an unknown name: the catalog names the close matches
+
+
+def _is_fit_file(path: Path) -> bool:
+    """Whether ``path`` is a fitted-model file (``format = "hdsim-fit-1"``), not a drive file."""
+    import tomllib
+
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8")).get("format") == "hdsim-fit-1"
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return False  # the drive-file reader reports what is wrong with it
 
 
 def _extras(args, model, analytic, names, result) -> dict:

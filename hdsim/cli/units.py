@@ -1,4 +1,4 @@
-"""``hdsim units``: the built-in units and their catalog data."""
+"""``hdsim units``: the built-in units and their catalog data; a drive-file template."""
 
 from __future__ import annotations
 
@@ -6,12 +6,22 @@ from hdsim.model.catalog import catalog_entry, default_unit, unit_names
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser("units", help="list the built-in units and their catalog data")
+    p = subparsers.add_parser("units", help="list the built-in units and their catalog data",
+                              description="List the built-in units and their catalog data, or print "
+                                          "a drive-file template (any drive from its datasheet).")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    p.add_argument("--template", action="store_true",
+                   help="print a commented drive-file template (TOML) on stdout; save it, edit it "
+                        "and give its path wherever a unit is accepted (--unit my_drive.toml)")
     p.set_defaults(func=main)
 
 
 def main(args) -> int:
+    if args.template:
+        from hdsim.model.drive_file import template
+
+        print(template(), end="")
+        return 0
     entries = {name: catalog_entry(name) for name in unit_names()}
     if args.json:
         from hdsim.cli import emit_json

@@ -225,6 +225,9 @@ class FitResult:
             "fit": {"rows": self.n, "rmse_rad": self.rmse_rad, "max_abs_error_rad": self.max_abs_rad,
                     "bic": self.bic, "n_params": self.n_params},
         }
+        drive_file = self.model.provenance.get("drive_file")
+        if drive_file:  # a drive that is no built-in unit: the file's table rebuilds it
+            doc["drive"] = dict(drive_file["table"])
         head = ("# hdsim fitted parameter set. Load with hdsim.identification.fit.load_fitted(path); the\n"
                 "# [parameters] table holds dotted overrides of the unit, in SI units.\n")
         return head + tomli_w.dumps(doc)
@@ -246,10 +249,29 @@ def load_fitted(path) -> HarmonicDrive:
     doc = read_toml(path, "fit")
     if doc.get("format") != "hdsim-fit-1":
         raise InputError(f"{path}: not an hdsim fit file (format = 'hdsim-fit-1' expected)")
-    model = load_unit(doc.get("unit") or None)
-    params = dict(doc.get("parameters", {}))
+    # the file may have been edited by hand: check its shape before using it
+    unit, effects, params = doc.get("unit"), doc.get("effects", {}), doc.get("parameters", {})
+    if unit is not None and not isinstance(unit, str):
+        raise InputError(f"{path}: unit must be a unit name, got {unit!r}")
+    for table, value in (("effects", effects), ("parameters", params)):
+        if not isinstance(value, dict):
+            raise InputError(f"{path}: [{table}] must be a table, got {value!r}")
+    drive = doc.get("drive")
+    if drive is not None and not isinstance(drive, dict):
+        raise InputError(f"{path}: [drive] must be a table of a drive file's keys, got {drive!r}")
+    if drive is not None:
+        from hdsim.model.drive_file import drive_from_table
+
+        model = drive_from_table(drive, str(path))
+    else:
+        model = load_unit(unit or None)
+    params = dict(params)
     slots = {}
-    for family, effect_id in doc.get("effects", {}).items():
+    for family, effect_id in effects.items():
+        if family not in fx.FAMILIES:
+            raise unknown_name(f"effect family in {path}", family, fx.FAMILIES)
+        if not isinstance(effect_id, str):
+            raise InputError(f"{path}: effects.{family} must be an effect id, got {effect_id!r}")
         if effect_id == "none":
             slots[family] = fx.NO_EFFECT[family]
             continue

@@ -6,11 +6,15 @@ forms give a structural compliance ``C_s`` and a mesh-zone compliance ``C_m``.
 ``e_i = κ C_m / (1/K_i − C_s)`` make the three-segment law hit K2 and K3. These
 numbers are then frozen into the unit: changing a dimension later changes ``C_s``
 and ``C_m`` through the closed forms while κ and e_i stay put.
+
+`assemble_unit` is the one recipe: the built-in units (`load_unit` with a name) and
+the drive files (`load_unit` with a path, `hdsim.model.drive_file`) go through it.
 """
 
 from __future__ import annotations
 
 import functools
+import os
 import tomllib
 from importlib import resources
 
@@ -168,17 +172,49 @@ def _read_only(value):
     return value
 
 
-@functools.cache
-def _build(name: str) -> HarmonicDrive:
+def assemble_unit(name: str, size: float, entry: dict, *, accuracy_arcmin: float,
+                  backlash_arcmin: float, slip_arcmin: float, provenance: dict,
+                  geometry: FlexsplineGeometry | None = None) -> HarmonicDrive:
+    """A calibrated unit from its catalog figures: the one recipe of every unit.
+
+    The built-in units and the drive files (`hdsim.model.drive_file`) are both built
+    here: wave generator and bench inertias from the size, the nominal geometry from
+    the assumed proportions (unless ``geometry`` is given), the calibration against
+    K1, K2, K3 (`calibrate`) and the default effects.
+
+    Parameters
+    ----------
+    name : str
+        Unit name.
+    size : float
+        Catalog size [-] (pitch diameter in tenths of an inch); need not be a whole number.
+    entry : dict
+        ``ratio`` [-], ``rated_torque``, ``T1``, ``T2`` [N·m], ``K1``, ``K2``, ``K3`` [N·m/rad].
+    accuracy_arcmin : float
+        Transmission-accuracy class [arcmin] that sets the kinematic-error amplitudes.
+    backlash_arcmin : float
+        Dead-zone width seen at the output [arcmin].
+    slip_arcmin : float
+        Micro-slip range to each stop of the default friction [arcmin].
+    provenance : dict
+        Notes kept with the unit; the calibration numbers are added under ``calibration``.
+    geometry : FlexsplineGeometry, optional
+        The geometry to calibrate at (default `nominal_geometry` of ``size``).
+
+    Returns
+    -------
+    HarmonicDrive
+        The calibrated model with the default effects; its provenance is read-only.
+    """
     data = _data()
-    entry = catalog_entry(name)
-    size, ratio = entry["size"], entry["ratio"]
+    ratio = entry["ratio"]
     scale = size / 25.0
     wg_data = data["wave_generator"]
     wave_generator = WaveGenerator(k_bearing=wg_data["k_bearing_size25"] * scale,
                                    balls=float(round(wg_data["balls_per_size"] * size)),
                                    engagement_fraction=wg_data["engagement_fraction"])
-    geometry = nominal_geometry(size, ratio)
+    if geometry is None:
+        geometry = nominal_geometry(size, ratio)
     kappa, e2, e3 = calibrate(geometry, wave_generator, entry["K1"], entry["K2"], entry["K3"])
     bench = data["bench"]
     J_out = bench["J_out_size25"] * scale**5
@@ -187,41 +223,84 @@ def _build(name: str) -> HarmonicDrive:
     K1 = entry["K1"]
     fxd = data["effects"]
     ke = data["kinematic_error"]  # amplitudes: shares of the catalog accuracy class (units.toml)
-    ke_class = arcmin_to_rad(ke["accuracy_arcmin"][name])
+    ke_class = arcmin_to_rad(accuracy_arcmin)
     kinematic_error = fx.FourierKinematicError(**{k: v * ke_class for k, v in ke["share"].items()},
                                                **ke["phases"], load_gain=ke["load_gain"])
+    notes = dict(provenance)
+    notes["calibration"] = {"kappa_mesh": kappa, "e2": e2, "e3": e3}
     return HarmonicDrive(
         name=name, geometry=geometry, wave_generator=wave_generator, drive=drive,
         calibration=Calibration(kappa_mesh=kappa),
         hardening=fx.ThreeSegmentHardening(T1=entry["T1"], T2=entry["T2"], e2=e2, e3=e3),
-        backlash=fx.DeadZoneBacklash(gap=arcmin_to_rad(fxd["backlash_arcmin"])),
+        backlash=fx.DeadZoneBacklash(gap=arcmin_to_rad(backlash_arcmin)),
         friction=fx.DahlSlip(slip_torque=fxd["slip_torque_per_TN"] * entry["rated_torque"],
-                             slip_max=arcmin_to_rad(fxd["slip_arcmin"])),
+                             slip_max=arcmin_to_rad(slip_arcmin)),
         damping=fx.ViscousDamping(coefficient=2.0 * bench["damping_ratio"] * np.sqrt(K1 * J_out)),
         kinematic_error=kinematic_error,
         # the unit is cached and every model derived from it shares this mapping
-        provenance=_read_only({"catalog": entry,
-                               "calibration": {"kappa_mesh": kappa, "e2": e2, "e3": e3},
-                               "geometry": "assumed proportions, hdsim/data/units.toml"}),
+        provenance=_read_only(notes),
     )
 
 
-def load_unit(name: str | None = None) -> HarmonicDrive:
-    """A built-in unit with its default effects.
+@functools.cache
+def _build(name: str) -> HarmonicDrive:
+    data = _data()
+    entry = catalog_entry(name)
+    fxd = data["effects"]
+    return assemble_unit(
+        name, entry["size"], entry, accuracy_arcmin=data["kinematic_error"]["accuracy_arcmin"][name],
+        backlash_arcmin=fxd["backlash_arcmin"], slip_arcmin=fxd["slip_arcmin"],
+        provenance={"catalog": entry, "geometry": "assumed proportions, hdsim/data/units.toml"})
+
+
+def is_drive_file(name_or_path) -> bool:
+    """Whether `load_unit` reads ``name_or_path`` as a drive file rather than a unit name.
 
     Parameters
     ----------
-    name : str, optional
-        Unit name; default `default_unit` (CSG-25-100).
+    name_or_path : str, os.PathLike or None
+        What was given as the unit.
+
+    Returns
+    -------
+    bool
+        True for a path object (`os.PathLike`), and for a string that is not a built-in unit name
+        and ends in ``.toml`` or holds a path separator.
+    """
+    if isinstance(name_or_path, os.PathLike):
+        return True
+    if not isinstance(name_or_path, str) or name_or_path in _data()["units"]:
+        return False
+    return name_or_path.lower().endswith(".toml") or any(sep in name_or_path for sep in "/\\")
+
+
+def load_unit(name_or_path: str | os.PathLike | None = None) -> HarmonicDrive:
+    """A built-in unit, or any drive from its drive file, with its default effects.
+
+    Parameters
+    ----------
+    name_or_path : str or os.PathLike, optional
+        A built-in unit name (`unit_names`; default `default_unit`, CSG-25-100), or the
+        path of a drive file: a TOML file with the figures of a datasheet
+        (`hdsim.model.drive_file`; a path object, or a string ending in ``.toml`` or
+        holding a path separator).
 
     Returns
     -------
     HarmonicDrive
-        The calibrated model (cached: the same object for the same name).
+        The calibrated model. A built-in unit is cached (the same object for the same
+        name); a drive file is read anew on every call.
 
     Raises
     ------
     InputError
-        On an unknown name.
+        On an unknown name (with the closest known ones), or a drive file that is
+        missing or refused (one line naming the file and the key).
     """
-    return _build(name or default_unit())
+    if is_drive_file(name_or_path):
+        from hdsim.model.drive_file import load_drive_file  # same layer; drive_file imports this module
+
+        return load_drive_file(name_or_path)
+    if name_or_path is not None and not isinstance(name_or_path, str):
+        raise InputError(f"a unit is a built-in name or a drive file path, got {type(name_or_path).__name__}")
+    return _build(name_or_path or default_unit())

@@ -11,10 +11,12 @@ Layout of a run file (one run, or a batch of ``M`` runs)::
     /effects         attrs: family -> effect id
     /scenario        attrs: toml (the scenario table as TOML text)
     /solver          attrs: method, rtol, nfev, ...
+    /drive_file      attrs: toml, path (only for a unit read from a drive file)
 
 Written atomically (a temporary file, then a rename). `hdsim.scenarios.run.Run.save`
 writes one and `hdsim.scenarios.run.read_run` reads it back into a `Run`; the model is
-rebuilt from the built-in unit of that name with every stored parameter and effect
+rebuilt from the built-in unit of that name, or from the drive file's table stored in
+``/drive_file`` (`hdsim.model.drive_file`), with every stored parameter and effect
 applied (docs/tutorial-first-simulation.md).
 """
 
@@ -33,6 +35,7 @@ from hdsim.atomic import atomic_path
 from hdsim.errors import InputError
 from hdsim.model.catalog import load_unit
 from hdsim.model.drive import HarmonicDrive
+from hdsim.model.drive_file import drive_from_table
 from hdsim.model.effects import make_effect
 from hdsim.scenarios.scenario import Scenario
 from hdsim.simulation.solver import SimulationResult
@@ -74,6 +77,10 @@ def write_run_file(path, run) -> Path:
             f.create_group("effects").attrs.update({s: e.id for s, e in run.model.effects().items()})
             f.create_group("scenario").attrs["toml"] = tomli_w.dumps(run.scenario.data)
             f.create_group("solver").attrs.update({k: v for k, v in result.solver.items()})
+            note = run.model.provenance.get("drive_file")
+            if note:  # the unit is not a built-in one: keep what rebuilds it
+                f.create_group("drive_file").attrs.update(toml=tomli_w.dumps(_plain(note["table"])),
+                                                          path=str(note["path"]))
     return path
 
 
@@ -89,10 +96,10 @@ def read_run_file(path) -> tuple[HarmonicDrive, Scenario, SimulationResult, dict
     -------
     tuple
         (model, scenario, result, metrics): the model rebuilt from the built-in unit
-        with the stored parameters and effects, the scenario (its ``source`` is the
-        file), the result (times [s], states, signals, solver statistics; ``metadata``
-        holds the file's ``unit``, ``scenario``, ``hdsim_version`` and ``created``) and
-        the metrics ``{name: (M,)}``.
+        (or the stored drive-file table) with the stored parameters and effects, the
+        scenario (its ``source`` is the file), the result (times [s], states, signals,
+        solver statistics; ``metadata`` holds the file's ``unit``, ``scenario``,
+        ``hdsim_version`` and ``created``) and the metrics ``{name: (M,)}``.
 
     Raises
     ------
@@ -119,14 +126,18 @@ def read_run_file(path) -> tuple[HarmonicDrive, Scenario, SimulationResult, dict
             effects = {k: str(v) for k, v in f["effects"].attrs.items()}
             scenario_toml = str(f["scenario"].attrs["toml"])
             unit = str(attrs["unit"])
+            drive_file = None
+            if "drive_file" in f:
+                g = f["drive_file"]
+                drive_file = (tomllib.loads(str(g.attrs["toml"])), str(g.attrs["path"]))
         except KeyError as exc:
             raise InputError(f"{path}: not an hdsim result file (missing {exc})") from None
-    model = stored_model(unit, params, effects)
+    model = stored_model(unit, params, effects, drive_file)
     scenario = Scenario(tomllib.loads(scenario_toml), str(path))
     return model, scenario, result, metrics
 
 
-def stored_model(unit: str, params: dict, effects: dict) -> HarmonicDrive:
+def stored_model(unit: str, params: dict, effects: dict, drive_file: tuple | None = None) -> HarmonicDrive:
     """A model from what a run file stores.
 
     Parameters
@@ -137,6 +148,9 @@ def stored_model(unit: str, params: dict, effects: dict) -> HarmonicDrive:
         Dotted parameter name → value (SI), scalars or arrays of shape (M,).
     effects : dict
         Slot → effect id.
+    drive_file : tuple, optional
+        ``(table, path)`` of the drive file the unit was read from: the unit is rebuilt
+        from this table (`hdsim.model.drive_file.drive_from_table`), not from ``unit``.
 
     Returns
     -------
@@ -150,4 +164,14 @@ def stored_model(unit: str, params: dict, effects: dict) -> HarmonicDrive:
         own = {name.partition(".")[2]: v for name, v in values.items() if name.partition(".")[0] == family}
         slots[family] = make_effect(family, effect_id, **own)
     rest = {name: v for name, v in values.items() if name.partition(".")[0] not in effects}
-    return load_unit(unit).with_effects(**slots).with_updates(rest)
+    base = load_unit(unit) if drive_file is None else drive_from_table(*drive_file)
+    return base.with_effects(**slots).with_updates(rest)
+
+
+def _plain(value):
+    """A read-only provenance table as plain dicts and lists (for `tomli_w`)."""
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value

@@ -36,7 +36,8 @@ def sobol(drive, params: str | Iterable[str], output: str, *, scenario=None, n: 
     drive : HarmonicDrive or str
         Any single model: a built-in unit (``hdsim.load_unit("CSG-25-100")``), one
         changed with ``with_updates`` or ``with_effects``, a fitted model
-        (``hdsim.identification.fit.load_fitted(path)``); or a built-in unit name.
+        (``hdsim.identification.fit.load_fitted(path)``); or a built-in unit name or the
+        path of a drive file.
     params : str or iterable of str
         Parameters to vary: dotted names (``"friction.slip_torque"``) or bare
         flexspline dimensions (``"h_pz"``); a comma-separated string works too.

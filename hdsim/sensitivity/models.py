@@ -20,7 +20,8 @@ def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, 
     Parameters
     ----------
     unit : HarmonicDrive, str or None
-        Any single model (built-in, modified, fitted) or a built-in unit name.
+        Any single model (built-in, modified, fitted) or a built-in unit name or the path
+        of a drive file (`hdsim.model.catalog.load_unit`).
     names : list of str
         Parameters to vary (``h_pz`` or dotted, ``friction.slip_torque``).
     output : str
@@ -52,8 +53,10 @@ def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, 
     # nominal values only matter for --range
     nominal = {} if range_frac is None else batch.nominal_values(drive, list(names))
     problem = build_problem(names, nominal, range_frac, bounds, dists)
-    func = batch.model_function(unit if isinstance(unit, str) else drive, list(names),
-                                output, scenario)
+    # a built-in name travels as a name; anything else (a drive file too) as the model read
+    # here, so the workers neither re-read a file nor depend on the working folder
+    by_name = isinstance(unit, str) and "drive_file" not in drive.provenance
+    func = batch.model_function(unit if by_name else drive, list(names), output, scenario)
     model = {"unit": drive.name, "output": output,
              "scenario": None if scenario is None else func.scenario.name,
              "fingerprint": batch.drive_fingerprint(drive, func.scenario)}

@@ -50,8 +50,8 @@ def as_drive(drive) -> HarmonicDrive:
     Parameters
     ----------
     drive : HarmonicDrive, str or None
-        A model object (built-in, modified with ``with_updates``, fitted) or the name of
-        a built-in unit (None: the default unit).
+        A model object (built-in, modified with ``with_updates``, fitted), the name of
+        a built-in unit (None: the default unit) or the path of a drive file.
 
     Returns
     -------
