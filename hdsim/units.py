@@ -16,6 +16,7 @@ ANGLE_UNITS: dict[str, float] = {
     "deg": math.pi / 180.0,
     "arcmin": math.pi / (180.0 * 60.0),
     "arcsec": math.pi / (180.0 * 3600.0),
+    "rev": 2.0 * math.pi,  # encoders and drive software often log revolutions
 }
 
 

@@ -25,7 +25,7 @@ DATA = Path(__file__).parent / "data"
 #: one unit of each angle suffix in rad, written out independently of hdsim.units:
 #: π/180, π/(180·60), π/(180·3600) to 16 digits
 RAD_PER = {"rad": 1.0, "deg": 0.017453292519943295, "arcmin": 2.908882086657216e-04,
-           "arcsec": 4.84813681109536e-06}
+           "arcsec": 4.84813681109536e-06, "rev": 6.283185307179586}
 
 
 def stiffness_rows(n=12, offset=0.0):

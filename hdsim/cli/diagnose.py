@@ -16,13 +16,19 @@ HELP = "find the effect families a measurement needs: rank, add the best, refit,
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser("diagnose", help=HELP, description=HELP + ".")
+    import argparse
+
+    from hdsim.cli._import_arguments import IMPORT_EPILOG, add_import_arguments
+
+    p = subparsers.add_parser("diagnose", help=HELP, description=HELP + ".", epilog=IMPORT_EPILOG,
+                              formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("data", metavar="DATA", help="measurement file (CSV or HDF5; see docs/measurements.md)")
     p.add_argument("--effects", default="",
                    help="families or effect ids already in the model (the baseline)")
-    p.add_argument("--unit", default=None, help="built-in unit to start from (default CSG-25-100)")
-    p.add_argument("--columns", default=None, metavar="MAP",
-                   help="column map for another bench, e.g. time_s=t,torque_Nm=T_out,angle_deg=pos")
+    p.add_argument("--unit", default=None,
+                   help="built-in unit or drive file (TOML, see 'hdsim units --template') to start from "
+                        "(default CSG-25-100)")
+    add_import_arguments(p)
     p.add_argument("--report", default=None, metavar="DIR",
                    help="write figures and an HTML/Markdown page of every step here")
     p.add_argument("--max-rounds", default=None, type=int, metavar="N",
@@ -32,28 +38,44 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    from hdsim.cli.fit import load_inputs
+    from hdsim.cli.fit import examine_inputs, load_inputs, say_checks
     from hdsim.identification.diagnosis import diagnose
+    from hdsim.identification.outcome import assess
     from hdsim.errors import InputError
 
     if args.max_rounds is not None and args.max_rounds < 0:
         raise InputError("--max-rounds must be 0 or more")
     meas, effects = load_inputs(args)
+    checks, data, wrong = examine_inputs(meas, args)
+    if wrong:  # not the test it claims: say what it looks like, fit nothing
+        return _emit(args, {"test": meas.test, "outcome": "wrong_test", "checks": checks, "data": data,
+                            "next_measurement": "", "baseline": None, "ranking": [], "added": [],
+                            "final": None, "ambiguous": [], "verdict": f"not a {meas.test} test: {wrong}"})
 
     def log(message):
         print(f"hdsim diagnose: {message}", file=sys.stderr, flush=True)
 
     result = diagnose(meas, effects, unit=args.unit, max_rounds=args.max_rounds, log=log)
     summary = result.to_json()
+    summary["outcome"], summary["next_measurement"] = assess(summary, data)
+    summary["checks"], summary["data"] = checks, data
+    say_checks("diagnose", checks)
     if args.report:
         from hdsim.identification.report import write_report
 
         page = write_report(result, args.report)
         summary["report"] = str(page)
+    return _emit(args, summary)
+
+
+def _emit(args, summary) -> int:
     if args.json:
         from hdsim.cli import emit_json
 
         emit_json(summary)
+        return 0
+    if summary["outcome"] == "wrong_test":
+        print(f"outcome: wrong_test: {summary['verdict']}")
         return 0
     _print(summary)
     return 0
@@ -71,6 +93,8 @@ def _print(s) -> None:
         print(f"ambiguous: {a['families'][0]} vs {a['families'][1]}; to separate them: {a['measurement']}")
     print(f"final: {', '.join(s['final']['effects']) or '(base model)'}, rms {s['final']['rmse_rad']:.3g} rad")
     print(s["verdict"])
+    print(f"outcome: {s['outcome']}" + (f"; to decide, record {s['next_measurement']}" if s["next_measurement"]
+                                         else ""))
     for line in s["findings"]["final"]:
         print(f"  - {line}")
     if "report" in s:

@@ -14,8 +14,9 @@ The file format (docs/measurements.md)::
 | ``stiffness`` | ``time_s``, ``torque_Nm``, ``angle_rad`` |
 | ``kinematic_error`` | ``time_s``, ``wg_angle_rad``, ``output_angle_rad``, ``torque_Nm`` |
 
-Angle columns may end in ``_deg``, ``_arcmin`` or ``_arcsec`` instead of ``_rad``;
-they are converted to radians on reading. Files from another bench are read with a
+Angle columns may end in ``_deg``, ``_arcmin``, ``_arcsec`` or ``_rev`` instead of
+``_rad``; they are converted to radians on reading. Logs written by other bench
+software are read with import options (`hdsim.io.import_options`). Files from another bench are read with a
 column map (canonical name -> name in the file). The same data may come as HDF5: one
 1-D dataset per column at the file's root, the ``#`` keys as file attributes.
 
@@ -42,6 +43,7 @@ import numpy as np
 
 from hdsim.errors import InputError
 from hdsim.atomic import atomic_path
+from hdsim.io.import_options import ImportOptions, RowReport
 from hdsim.io.measurement_checks import (
     RATED_KEYS,
     TESTS,
@@ -91,6 +93,8 @@ class Measurement:
         Every ``#`` key of the file (HDF5: every attribute) as text.
     source : str
         Path the data were read from (or ``'<arrays>'``).
+    rows : RowReport
+        What the import options did to the rows (dropped, windowed, joined runs).
     """
 
     test: str
@@ -102,6 +106,7 @@ class Measurement:
     rated_torque: float | None = None
     meta: dict = field(default_factory=dict)
     source: str = "<arrays>"
+    rows: RowReport = RowReport()
 
     def __len__(self) -> int:
         return int(self.time.size)
@@ -134,7 +139,8 @@ class Measurement:
         return {name: by_name[name] for name in TESTS[self.test]}
 
 
-def _build(data: dict[str, np.ndarray], test: str, ratio, rated, meta, source) -> Measurement:
+def _build(data: dict[str, np.ndarray], test: str, ratio, rated, meta, source,
+           rows: RowReport = RowReport()) -> Measurement:
     def frozen(values):
         values = np.array(values, dtype=np.float64)  # a private copy, then read-only
         values.flags.writeable = False
@@ -151,10 +157,12 @@ def _build(data: dict[str, np.ndarray], test: str, ratio, rated, meta, source) -
         rated_torque=rated,
         meta=dict(meta),
         source=source,
+        rows=rows,
     )
 
 
-def load_measurement(path: str | os.PathLike, columns: dict[str, str] | None = None) -> Measurement:
+def load_measurement(path: str | os.PathLike, columns: dict[str, str] | None = None,
+                     **import_options) -> Measurement:
     """Read and check a measurement file (CSV, or HDF5 by suffix or content).
 
     Parameters
@@ -167,7 +175,12 @@ def load_measurement(path: str | os.PathLike, columns: dict[str, str] | None = N
         ``{"time_s": "t", "torque_Nm": "T_out", "angle_deg": "pos"}``. An angle key's
         suffix gives the unit of the file's column. With a map, file columns that are
         neither mapped nor canonical are ignored (another bench logs more than this test
-        needs); without one, every column must be a canonical column.
+        needs); without one, every column must be a canonical column. A name may be
+        ``FACTOR*name`` (``"torque_Nm": "5.11*iq_A"``: torque from motor current).
+    **import_options
+        What the log does not say itself (`hdsim.io.import_options.ImportOptions`):
+        ``test``, ``ratio``, ``rated_torque``, ``meta`` (other ``#`` keys), ``drop_nan``,
+        ``window`` (T0, T1) [s], ``sample_rate`` [Hz] (no time column), ``concatenated``.
 
     Returns
     -------
@@ -183,9 +196,14 @@ def load_measurement(path: str | os.PathLike, columns: dict[str, str] | None = N
         column, a non-numeric, NaN or infinite cell, fewer than 10 rows, time not
         strictly increasing, an unreadable HDF5 file.
     """
-    parsed = read_measurement_file(path, columns)
+    try:
+        options = ImportOptions(**import_options)
+    except TypeError:
+        raise InputError(f"load_measurement: unknown import option among {', '.join(import_options)}; "
+                         f"known: {', '.join(ImportOptions.__dataclass_fields__)}") from None
+    parsed = read_measurement_file(path, columns, options)
     return _build(parsed.data, parsed.test, parsed.ratio, parsed.rated_torque, parsed.meta,
-                  str(path))
+                  str(path), parsed.rows)
 
 
 def make_measurement(

@@ -17,6 +17,7 @@ import math
 import numpy as np
 
 from hdsim.errors import InputError
+from hdsim.io.import_options import split_factor
 from hdsim.units import ANGLE_UNITS
 
 __all__ = [
@@ -281,7 +282,8 @@ def interpret_meta(
 
 
 def resolve_columns(
-    header: list[str], test: str, columns: dict[str, str] | None, where: Where, what: str
+    header: list[str], test: str, columns: dict[str, str] | None, where: Where, what: str,
+    optional: tuple[str, ...] = (),
 ) -> dict[str, tuple[int, float]]:
     """Map each canonical SI column of ``test`` to (index in ``header``, unit factor).
 
@@ -298,12 +300,15 @@ def resolve_columns(
         Names the file in messages.
     what : str
         ``'column'`` (CSV) or ``'dataset'`` (HDF5), for messages.
+    optional : tuple of str
+        Canonical SI names that may be missing (``time_s`` when the time comes from the
+        row index, `hdsim.io.import_options`).
 
     Returns
     -------
     dict of str to tuple of (int, float)
-        Canonical SI name (``'angle_rad'``) -> (index in ``header``, size of the file's
-        unit [rad], 1.0 for columns that are not angles).
+        Canonical SI name (``'angle_rad'``) -> (index in ``header``, the factor to SI: the
+        size of the file's angle unit [rad], times a map's ``FACTOR*column`` factor).
 
     Raises
     ------
@@ -318,9 +323,11 @@ def resolve_columns(
             raise where.fail(f"{what} '{name}' appears twice in the header")
     # Rename the file's columns to canonical names by the map (canonical -> file).
     canonical_of: dict[str, str] = {}
+    scale_of: dict[str, float] = {}  # canonical spelling -> factor of FACTOR*column
     if columns:
         check_map_keys(columns, where.path)
-        for key, file_name in columns.items():
+        for key, source in columns.items():
+            file_name, scale_of[key] = split_factor(source) if source not in header else (source, 1.0)
             if file_name not in header:
                 raise where.fail(f"column map reads '{key}' from {what} '{file_name}', which is "
                                  f"not in the file (it has {', '.join(header)})")
@@ -346,12 +353,14 @@ def resolve_columns(
                              f"both give {si}; expected one of them")
         found[si] = (i, spelled)
     for si in needed:
-        if si not in found:
+        if si not in found and si not in optional:
             split = split_unit(si)
-            alt = f" (or {split[0]}_deg/_arcmin/_arcsec)" if split else ""
+            alt = f" (or {split[0]}_deg/_arcmin/_arcsec/_rev)" if split else ""
+            if si == "time_s":
+                alt = " (a log without a clock: give its sample rate with --sample-rate HZ)"
             raise where.fail(f"missing {what} '{si}'{alt}; a {test} file needs "
                              f"{', '.join(needed)}")
-    return {si: (i, ANGLE_UNITS[split_unit(sp)[1]] if split_unit(sp) else 1.0)
+    return {si: (i, (ANGLE_UNITS[split_unit(sp)[1]] if split_unit(sp) else 1.0) * scale_of.get(sp, 1.0))
             for si, (i, sp) in found.items()}
 
 
@@ -366,7 +375,7 @@ def _unknown_column_text(name: str, spelled: str, test: str, what: str, mapped: 
         hint = " (the separator must be a comma)"
     extra = "" if mapped else "; use a column map for another bench's names"
     return (f"unknown {what} {shown}{hint}; a {test} file has {', '.join(TESTS[test])} "
-            f"(angles may end in _deg, _arcmin, _arcsec){extra}")
+            f"(angles may end in _deg, _arcmin, _arcsec, _rev){extra}")
 
 
 def check_values(data: dict[str, np.ndarray], where: Where, names: dict[str, str]) -> None:
@@ -394,7 +403,8 @@ def check_values(data: dict[str, np.ndarray], where: Where, names: dict[str, str
         if bad.size:
             i = int(bad[0])
             raise where.fail(f"{where.row(i)}, {names[si]}: {float(values[i])!r} is not "
-                             "finite; expected a finite number")
+                             f"finite; expected a finite number ({bad.size} such rows; a log's failed "
+                             "reads are dropped with --drop-nan)")
     if n < MIN_ROWS:
         raise where.fail(f"{n} data rows; expected at least {MIN_ROWS}")
     t = data["time_s"]
@@ -402,4 +412,5 @@ def check_values(data: dict[str, np.ndarray], where: Where, names: dict[str, str
     if bad.size:
         i = int(bad[0]) + 1
         raise where.fail(f"{where.row(i)}, {names['time_s']}: {float(t[i])!r} after "
-                         f"{float(t[i - 1])!r}; expected time to increase strictly")
+                         f"{float(t[i - 1])!r}; expected time to increase strictly (several runs whose clock "
+                         "restarts? --concatenated joins them)")

@@ -17,6 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from hdsim.errors import InputError
+from hdsim.io.import_options import AS_WRITTEN, ImportOptions, RowReport, apply_rows
 from hdsim.io.measurement_checks import (
     MIN_ROWS,
     TESTS,
@@ -51,7 +52,9 @@ class Parsed(NamedTuple):
     rated_torque : float or None
         Rated torque [N·m].
     meta : dict of str to str
-        Every ``#`` key (HDF5: attribute) as text.
+        Every ``#`` key (HDF5: attribute) as text, the import options' keys applied.
+    rows : RowReport
+        What the import options did to the rows.
     """
 
     data: dict
@@ -59,9 +62,11 @@ class Parsed(NamedTuple):
     ratio: float | None
     rated_torque: float | None
     meta: dict
+    rows: RowReport = RowReport()
 
 
-def read_measurement_file(path: str | os.PathLike, columns: dict[str, str] | None) -> Parsed:
+def read_measurement_file(path: str | os.PathLike, columns: dict[str, str] | None,
+                          options: ImportOptions = AS_WRITTEN) -> Parsed:
     """Open a measurement file and read it as HDF5 or as CSV.
 
     Parameters
@@ -70,7 +75,9 @@ def read_measurement_file(path: str | os.PathLike, columns: dict[str, str] | Non
         The file. ``.h5``/``.hdf5``/``.hdf`` files, and any file starting with the HDF5
         signature, are read as HDF5; everything else as CSV.
     columns : dict of str to str or None
-        Column map, canonical name -> name in the file.
+        Column map, canonical name -> name in the file (a name may be ``FACTOR*name``).
+    options : ImportOptions
+        What the user says of the log (keys, rows, time axis).
 
     Returns
     -------
@@ -95,19 +102,22 @@ def read_measurement_file(path: str | os.PathLike, columns: dict[str, str] | Non
         raise InputError(f"{shown}: is a directory; expected a measurement file") from None
     except OSError as exc:
         raise InputError(f"{shown}: cannot read ({exc.strerror or exc})") from None
+    except ValueError as exc:  # a name the system refuses: a NUL byte
+        raise InputError(f"{shown!r}: cannot read ({exc})") from None
     if columns is not None and not isinstance(columns, dict):
         raise InputError(f"{shown}: the column map must be a dict canonical -> name in file")
     if is_hdf5:
         if not raw:
             raise InputError(f"{shown}: the file is empty; expected an HDF5 file")
-        return read_hdf5(shown, columns)
-    return read_csv(shown, raw, columns)
+        return read_hdf5(shown, columns, options)
+    return read_csv(shown, raw, columns, options)
 
 
 # --------------------------------------------------------------------------- CSV
 
 
-def read_csv(path: str, raw: bytes, columns: dict[str, str] | None) -> Parsed:
+def read_csv(path: str, raw: bytes, columns: dict[str, str] | None,
+             options: ImportOptions = AS_WRITTEN) -> Parsed:
     """Read the bytes of a CSV measurement file.
 
     Parameters
@@ -118,6 +128,8 @@ def read_csv(path: str, raw: bytes, columns: dict[str, str] | None) -> Parsed:
         The whole file (UTF-8, a byte-order mark and Windows line ends allowed).
     columns : dict of str to str or None
         Column map, canonical name -> name in the file.
+    options : ImportOptions
+        What the user says of the log.
 
     Returns
     -------
@@ -168,9 +180,10 @@ def read_csv(path: str, raw: bytes, columns: dict[str, str] | None) -> Parsed:
     if header_at is None:
         raise where.fail("no header row; expected a header such as "
                          "'time_s,torque_Nm,angle_rad' after the '#' lines")
-    test, ratio, rated = interpret_meta(meta, where, origin)
-    header = [h.strip() for h in next(csv.reader([lines[header_at - 1].rstrip("\r")]))]
-    index = resolve_columns(header, test, columns, where, "column")
+    keys, origin = _with_options(meta, origin, options)
+    test, ratio, rated = interpret_meta(keys, where, origin)
+    header = _header_cells(lines[header_at - 1].rstrip("\r"), header_at, where)
+    index = resolve_columns(header, test, columns, where, "column", _optional(options))
 
     rows: list[list[str]] = []
     numbers: list[int] = []
@@ -190,14 +203,43 @@ def read_csv(path: str, raw: bytes, columns: dict[str, str] | None) -> Parsed:
     where = Where(path, lines=numbers)
     if not rows:
         raise where.fail(f"no data rows after the header; expected at least {MIN_ROWS}")
-    data = {si: _column_values(rows, i, header[i], where) * factor
+    data = {si: _column_values(rows, i, header[i], where, options.drop_nan) * factor
             for si, (i, factor) in index.items()}
-    check_values(data, where, {si: f"column '{header[i]}'" for si, (i, _) in index.items()})
-    return Parsed(data, test, ratio, rated, meta)
+    data, report, kept = apply_rows(data, options, where)
+    where = Where(path, lines=[numbers[k] for k in kept])
+    check_values(data, where, _shown(header, index))
+    return Parsed(data, test, ratio, rated, {**meta, **options.overrides()}, report)
 
 
-def _column_values(rows: list[list[str]], i: int, name: str, where: Where) -> np.ndarray:
+def _with_options(meta: dict, origin: dict, options: ImportOptions) -> tuple[dict, dict]:
+    """The file's keys with the import options' keys over them, and where each came from."""
+    keys = options.overrides()
+    return {**meta, **keys}, {**origin, **{k: "option: " for k in keys}}
+
+
+def _optional(options: ImportOptions) -> tuple[str, ...]:
+    """Columns a file may lack under these options: the time when it comes from the row index."""
+    return ("time_s",) if options.sample_rate is not None else ()
+
+
+def _shown(header, index) -> dict[str, str]:
+    shown = {si: f"column '{header[i]}'" for si, (i, _) in index.items()}
+    return {"time_s": "time_s (from the row index)", **shown}
+
+
+def _header_cells(line: str, number: int, where: Where) -> list[str]:
+    try:
+        return [h.strip() for h in next(csv.reader([line]))]
+    except csv.Error as exc:  # a lone carriage return inside the line, a name over csv's size limit
+        why = "a carriage return inside the line" if "\r" in line else str(exc)
+        raise where.fail(f"line {number}: cannot read the header row ({why}); expected column "
+                         "names separated by commas, lines ending in \\n or \\r\\n") from None
+
+
+def _column_values(rows: list[list[str]], i: int, name: str, where: Where, blank_is_nan: bool) -> np.ndarray:
     cells = [row[i] for row in rows]
+    if blank_is_nan:  # --drop-nan: an empty cell is a failed read, like a written NaN
+        cells = [cell if cell.strip() else "nan" for cell in cells]
     try:
         return np.array(cells, dtype=np.float64)
     except ValueError:
@@ -228,7 +270,7 @@ def _attr_text(value) -> str:
     return str(value)
 
 
-def read_hdf5(path: str, columns: dict[str, str] | None) -> Parsed:
+def read_hdf5(path: str, columns: dict[str, str] | None, options: ImportOptions = AS_WRITTEN) -> Parsed:
     """Read an HDF5 measurement file: one 1-D dataset per column, keys as attributes.
 
     Parameters
@@ -237,6 +279,8 @@ def read_hdf5(path: str, columns: dict[str, str] | None) -> Parsed:
         The file.
     columns : dict of str to str or None
         Column map, canonical name -> dataset name in the file.
+    options : ImportOptions
+        What the user says of the log.
 
     Returns
     -------
@@ -261,13 +305,14 @@ def read_hdf5(path: str, columns: dict[str, str] | None) -> Parsed:
                          "dataset per column") from None
     with handle:
         meta = {str(k): _attr_text(v) for k, v in handle.attrs.items()}
-        test, ratio, rated = interpret_meta(meta, where, {k: f"attribute '{k}': " for k in meta})
+        keys, origin = _with_options(meta, {k: f"attribute '{k}': " for k in meta}, options)
+        test, ratio, rated = interpret_meta(keys, where, origin)
         # Groups (e.g. provenance) are not columns; only root datasets are.
         header = [name for name, item in handle.items() if isinstance(item, h5py.Dataset)]
         if not header:
             raise where.fail(f"no datasets at the file's root; a {test} file needs "
                              f"{', '.join(TESTS[test])}")
-        index = resolve_columns(header, test, columns, where, "dataset")
+        index = resolve_columns(header, test, columns, where, "dataset", _optional(options))
         data, length = {}, None
         for si, (i, factor) in index.items():
             name = header[i]
@@ -281,5 +326,7 @@ def read_hdf5(path: str, columns: dict[str, str] | None) -> Parsed:
                                  f"'{length[0]}' has {length[1]}; expected equal lengths")
             length = length or (name, dset.shape[0])
             data[si] = np.asarray(dset[()], dtype=np.float64) * factor
-    check_values(data, where, {si: f"dataset '{header[i]}'" for si, (i, _) in index.items()})
-    return Parsed(data, test, ratio, rated, meta)
+    data, report, _ = apply_rows(data, options, where)
+    check_values(data, where, {"time_s": "time_s (from the row index)",
+                               **{si: f"dataset '{header[i]}'" for si, (i, _) in index.items()}})
+    return Parsed(data, test, ratio, rated, {**meta, **options.overrides()}, report)

@@ -1,0 +1,50 @@
+"""The import options of ``fit`` and ``diagnose``: a bench log read as it was written.
+
+docs/measurements.md, "Bringing your own bench log", shows them on real-looking logs.
+"""
+
+from __future__ import annotations
+
+IMPORT_EPILOG = """\
+reading a log from other bench software (nothing needs editing):
+  --test stiffness --ratio 100 --rated-torque 67   the '#' keys the log lacks
+  --columns time_s=t,torque_Nm=5.11*iq_A,angle_rev=pos
+                                 map and scale columns: FACTOR*column (e.g. torque from
+                                 motor current), angle units _rad _deg _arcmin _arcsec _rev
+  --drop-nan                     drop rows with a NaN or empty cell (the count is reported)
+  --window 2.5:40                keep 2.5 s <= time_s <= 40 s
+  --concatenated                 several runs whose clock restarts: joined end to end
+  --sample-rate 1                a log without a time column (a step test point by point):
+                                 time = row / rate
+"""
+
+
+def add_import_arguments(parser) -> None:
+    """Add the import options (contracts of the measurement files, section 1a) to a verb."""
+    group = parser.add_argument_group("reading the log (see the notes below)")
+    group.add_argument("--columns", default=None, metavar="MAP",
+                       help="column map for another bench, e.g. time_s=t,torque_Nm=5.11*iq_A,angle_deg=pos")
+    group.add_argument("--test", default=None, choices=("stiffness", "kinematic_error"),
+                       help="the test the log holds (sets '# test')")
+    group.add_argument("--ratio", default=None, type=float, metavar="N", help="transmission ratio (sets '# ratio')")
+    group.add_argument("--rated-torque", default=None, type=float, metavar="T_N",
+                       help="rated torque [N·m] (sets '# rated_torque_Nm')")
+    group.add_argument("--meta", action="append", default=[], metavar="KEY=VALUE",
+                       help="set any other '#' key, e.g. torque_side=output (repeatable)")
+    group.add_argument("--drop-nan", action="store_true",
+                       help="drop rows with a non-finite or empty cell in a used column (counted)")
+    group.add_argument("--window", default=None, metavar="T0:T1", help="keep rows with T0 <= time_s <= T1 [s]")
+    group.add_argument("--concatenated", action="store_true",
+                       help="the log holds several runs whose clock restarts: join them end to end")
+    group.add_argument("--sample-rate", default=None, type=float, metavar="HZ",
+                       help="a log without a time column: time_s = row index / HZ")
+
+
+def import_options(args):
+    """The `hdsim.io.import_options.ImportOptions` of parsed arguments (InputError on bad strings)."""
+    from hdsim.io.import_options import ImportOptions, parse_meta, parse_window
+
+    return ImportOptions(test=args.test, ratio=args.ratio, rated_torque=args.rated_torque,
+                         meta=parse_meta(args.meta), drop_nan=args.drop_nan,
+                         window=parse_window(args.window) if args.window else None,
+                         sample_rate=args.sample_rate, concatenated=args.concatenated)

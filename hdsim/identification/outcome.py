@@ -1,0 +1,86 @@
+"""The honest outcome of a diagnosis: what was found, and what the record cannot tell.
+
+``outcome`` is one of
+
+- ``found``: families added and the residual explained (white, or at the noise floor);
+- ``improved``: families added, yet structure remains in the residual;
+- ``nothing_missing``: nothing added and nothing left to explain;
+- ``cannot_decide``: nothing (more) could be decided from this record: too few
+  independent samples, too few reversals, candidates that explain the residual equally
+  well, or a rate question asked of one loading rate; ``next_measurement`` says what
+  to record so that it can;
+- ``wrong_test``: the data are not the test they claim (`hdsim.io.data_checks`); no
+  model is fitted.
+
+"Nothing added" is never reported as "nothing missing" unless the residual is explained:
+a diagnosis that could not look is not a diagnosis that looked and found nothing
+(docs/tutorial-find-missing-effect.md, "Outcomes").
+"""
+
+from __future__ import annotations
+
+#: fewer effectively independent samples than this cannot rank families (the score's
+#: ln(n_eff) penalty and the hold-out folds need a few dozen)
+MIN_EFFECTIVE_SAMPLES = 30
+
+#: families whose question is about the loading rate
+RATE_FAMILIES = ("damping",)
+
+
+def assess(diagnosis_json: dict, data: dict) -> tuple[str, str]:
+    """(outcome, next_measurement) of a diagnosis.
+
+    Parameters
+    ----------
+    diagnosis_json : dict
+        `hdsim.identification.diagnosis.Diagnosis.to_json` of the diagnosis.
+    data : dict
+        The data summary of `hdsim.io.data_checks.examine` (``reversals``,
+        ``loading_rates``, ``rows``).
+
+    Returns
+    -------
+    tuple of str
+        The outcome and, for ``cannot_decide`` (and ``improved``), what to measure next
+        ('' when nothing more is needed).
+    """
+    explained = bool(diagnosis_json["success"])
+    added = diagnosis_json["added"]
+    ranking = [c for c in diagnosis_json["ranking"] if c.get("score") is not None]
+    reasons = _limits(diagnosis_json, data, ranking)
+    if added:
+        return ("found", "") if explained else ("improved", reasons[0] if reasons else "")
+    if explained:
+        return "nothing_missing", ""
+    if reasons:
+        return "cannot_decide", reasons[0]
+    return "cannot_decide", ("the residual keeps a structure that no family of the library explains on this "
+                             "record: look at the residual against time and torque in the report, and record "
+                             "the test at a second amplitude and loading rate")
+
+
+def _limits(diagnosis_json: dict, data: dict, ranking: list) -> list[str]:
+    """What kept this record from deciding, each as the measurement that would, most pressing first."""
+    out = []
+    rows = int(data.get("rows", 0))
+    n_eff = min((c.get("n_eff") or 0.0 for c in ranking), default=0.0)
+    if ranking and n_eff < MIN_EFFECTIVE_SAMPLES:
+        out.append(f"more independent samples: the residual is correlated over many rows (about {n_eff:.0f} "
+                   f"independent samples of {rows}); record more cycles, or the same cycle more slowly "
+                   "with less filtering")
+    if _reversals(diagnosis_json, data) < 2:
+        out.append("a full torque cycle and back (0 → +T → −T → 0): without reversals the loop that "
+                   "friction, hysteresis and backlash leave cannot be seen")
+    for pair in diagnosis_json.get("ambiguous", []):
+        out.append(pair["measurement"])
+    if data.get("loading_rates", 2) < 2 and ranking and ranking[0]["family"] in RATE_FAMILIES:
+        out.append("the same torque cycle at a second loading rate (4× faster or slower): with one rate, "
+                   "rate-dependent losses cannot be told from friction")
+    return out
+
+
+def _reversals(diagnosis_json: dict, data: dict) -> int:
+    """Torque reversals of a locked test (a kinematic-error test needs none: many by convention)."""
+    if diagnosis_json.get("test") == "kinematic_error":
+        return 2
+    return int(data.get("reversals", 2))

@@ -1,0 +1,343 @@
+"""Checks of a measurement before any fit: is it the test it claims, and what can it tell?
+
+Every check is model-free: it reads the record and, where it needs a scale, the drive's
+datasheet numbers (rated torque, the softest and stiffest catalog stiffness K1, K3).
+Each returns a `Check`: a name, a status (``ok``, ``warn``, ``fail``) and one plain
+sentence a bench engineer would write in a log book. A ``fail`` of an *identity* check
+(the twist span of a locked test, the angle following the torque, a kinematic error
+that is identically zero, a ratio the angles contradict) means the record is not the
+test it claims; `wrong_test` gives that sentence (docs/measurements.md, "Checks").
+
+Noise is estimated from the data alone: the record minus its local cubic fit over seven
+samples (a Savitzky-Golay filter) keeps the white noise and removes any signal smooth
+over seven samples, curvature included (plain second differences read the curvature of
+a coarsely sampled cycle as noise). For white noise of rms σ that residual has rms
+``σ √(1 − h₀)``, h₀ the filter's centre weight (1/3); its median absolute value over
+0.6745 makes the estimate robust to the few steps (reversals, stick-slip) a record has.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Check", "DriveScale", "noise_level", "turning_points", "loading_rates", "rate_groups", "run_checks",
+           "wrong_test", "import_checks", "examine"]
+
+#: a locked drive twists at most this many times its softest catalog compliance predicts
+#: (K1 over the whole torque swing, plus a generous lost motion) before the record is
+#: taken for an output turning freely
+SPAN_FACTOR = 20.0
+#: lost motion allowed on top of the elastic twist [rad] (catalog classes are 1-3 arcmin;
+#: a worn or home-built drive may reach ten)
+LOST_MOTION_ALLOWANCE = math.radians(10.0 / 60.0)
+#: rank correlation of angle and torque below which the angle does not follow the torque
+FOLLOW_MIN = 0.5
+#: torque noise over its swing: above the first a warning, above the second the record
+#: cannot show a loop at all
+NOISE_WARN, NOISE_FAIL = 0.05, 0.3
+#: two loading rates are distinct when they differ by more than this factor
+RATE_STEP = 1.5
+#: samples of the local cubic fit that the noise estimate subtracts
+NOISE_WINDOW = 7
+#: identity checks: a fail means the record is not the test it claims
+IDENTITY = ("twist_span", "angle_follows_torque", "kinematic_error_not_zero", "ratio_consistent")
+
+
+@dataclass(frozen=True)
+class Check:
+    """One data check: ``check`` (its name), ``status`` (ok, warn, fail) and ``message``."""
+
+    check: str
+    status: str
+    message: str
+
+    def to_json(self) -> dict:
+        return {"check": self.check, "status": self.status, "message": self.message}
+
+
+@dataclass(frozen=True)
+class DriveScale:
+    """The datasheet numbers the checks compare a record with.
+
+    Attributes
+    ----------
+    name : str
+        The drive, for the messages.
+    rated_torque : float
+        T_N [N·m].
+    K_soft, K_stiff : float
+        Softest and stiffest catalog stiffness (K1, K3) [N·m/rad].
+    """
+
+    name: str
+    rated_torque: float
+    K_soft: float
+    K_stiff: float
+
+    @classmethod
+    def of(cls, model) -> "DriveScale":
+        """The scale of a `hdsim.model.drive.HarmonicDrive` (its catalog numbers, else its
+        base stiffness)."""
+        catalog = model.provenance.get("catalog") or {}
+        K = float(np.max(model.base_stiffness))
+        return cls(str(model.name), float(np.max(model.drive.rated_torque)),
+                   float(catalog.get("K1", K)), float(catalog.get("K3", K)))
+
+
+def noise_level(x) -> float:
+    """Rms of the white noise on a signal, estimated without a model (module text) [unit of x]."""
+    from scipy.signal import savgol_coeffs, savgol_filter
+
+    x = np.asarray(x, dtype=float)
+    if x.size < NOISE_WINDOW:
+        return 0.0
+    residual = x - savgol_filter(x, NOISE_WINDOW, 3, mode="interp")
+    centre = float(savgol_coeffs(NOISE_WINDOW, 3)[NOISE_WINDOW // 2])
+    return float(np.median(np.abs(residual)) / 0.6745 / math.sqrt(1.0 - centre))
+
+
+def smoothed(x, noise: float) -> tuple[np.ndarray, float]:
+    """``x`` through a centred moving average long enough to bring ``noise`` well under its
+    swing, and the noise left on it (``noise / √width``)."""
+    x = np.asarray(x, dtype=float)
+    swing = max(float(np.ptp(x)), 1e-300)
+    # the window's noise is noise/√w; aim at 1 % of the swing, within 1 … n/50 samples
+    w = int(min(max((noise / (0.01 * swing)) ** 2, 1.0), max(x.size // 50, 1)))
+    width = 2 * (w // 2) + 1
+    if width <= 1:
+        return x.copy(), noise
+    padded = np.pad(x, width // 2, mode="edge")
+    return np.convolve(padded, np.ones(width) / width, mode="valid"), noise / math.sqrt(width)
+
+
+def turning_points(x, band: float) -> list[int]:
+    """Indices where ``x`` turns back by more than ``band`` (a dead band ignores noise wiggles).
+
+    Returns the first index, every turning point and ``len(x)``.
+    """
+    x = np.asarray(x, dtype=float)
+    turns, direction = [0], 0
+    extreme, extreme_i = x[0], 0
+    for i in range(1, x.size):
+        v = x[i]
+        if direction == 0:
+            if abs(v - x[0]) > band:
+                direction, extreme, extreme_i = (1 if v > x[0] else -1), v, i
+        elif direction * (v - extreme) > 0:
+            extreme, extreme_i = v, i
+        elif direction * (extreme - v) > band:
+            turns.append(extreme_i)
+            direction, extreme, extreme_i = -direction, v, i
+    turns.append(x.size)
+    return turns
+
+
+def loading_rates(time, smooth_torque, turns) -> np.ndarray:
+    """Mean |dT/dt| [N·m/s] of each monotone leg between turning points."""
+    t = np.asarray(time, dtype=float)
+    rates = []
+    for a, b in zip(turns[:-1], turns[1:]):
+        if b - a > 2 and t[b - 1] > t[a]:
+            rates.append(abs(smooth_torque[b - 1] - smooth_torque[a]) / (t[b - 1] - t[a]))
+    return np.array(rates)
+
+
+def rate_groups(values, step: float = RATE_STEP) -> list[float]:
+    """The median of each group ``values`` fall in, neighbours within a factor ``step`` being one group."""
+    v = np.sort(np.asarray(values, dtype=float)[np.asarray(values) > 0])
+    if v.size == 0:
+        return []
+    cuts = np.flatnonzero(np.diff(np.log(v)) > math.log(step)) + 1
+    return [float(np.median(g)) for g in np.split(v, cuts)]
+
+
+def _rank_correlation(a, b) -> float:
+    from scipy.stats import spearmanr
+
+    if np.ptp(a) == 0 or np.ptp(b) == 0:
+        return 0.0
+    return float(spearmanr(a, b).statistic)
+
+
+def _arcmin(x: float) -> str:
+    return f"{math.degrees(x) * 60:.3g} arcmin" if abs(x) < math.radians(2) else f"{math.degrees(x):.3g}°"
+
+
+def _saturation(name: str, x) -> Check | None:
+    """A channel that sits at its extreme value for many samples: clipped or saturated."""
+    x = np.asarray(x, dtype=float)
+    for value, end in ((np.max(x), "maximum"), (np.min(x), "minimum")):
+        at = x == value
+        if np.count_nonzero(at) >= max(5, 0.01 * x.size) and np.ptp(x) > 0:
+            return Check("saturation", "warn", f"the {name} sits at its {end} {value:.6g} for "
+                         f"{np.count_nonzero(at)} rows ({100 * np.mean(at):.1f} %): clipped or saturated, "
+                         "those rows do not show the drive")
+    return None
+
+
+def run_checks(meas, drive: DriveScale) -> tuple[list[Check], dict]:
+    """Every data check of a measurement, and the figures the data summary reports.
+
+    Parameters
+    ----------
+    meas : hdsim.io.measurement.Measurement
+        The record.
+    drive : DriveScale
+        The datasheet numbers.
+
+    Returns
+    -------
+    tuple
+        (list of `Check`, ``{"noise_floor_rad", "torque_noise_Nm", "reversals",
+        "loading_rates"}``): the noise floor is the angle's (stiffness test) or the
+        kinematic error's (kinematic-error test), estimated without any model.
+    """
+    T = np.asarray(meas.torque, dtype=float)
+    t = np.asarray(meas.time, dtype=float)
+    ke = meas.test == "kinematic_error"
+    response = np.asarray(meas.kinematic_error if ke else meas.angle, dtype=float)
+    torque_noise = noise_level(T)
+    smooth_T, smooth_noise = smoothed(T, torque_noise)
+    swing = float(np.ptp(smooth_T))
+    band = max(5.0 * smooth_noise, 0.02 * swing, 1e-12)
+    turns = turning_points(smooth_T, band)
+    rates = loading_rates(t, smooth_T, turns)
+    reversals = len(turns) - 2
+    checks: list[Check] = []
+
+    if ke:
+        checks += _kinematic_error_identity(meas, drive)
+    else:
+        checks += _locked_identity(meas, T, drive)
+    if swing <= 0 or torque_noise > NOISE_FAIL * swing:
+        checks.append(Check("torque_noise", "fail", f"the torque noise ({torque_noise:.3g} N·m rms) is "
+                            f"{torque_noise / max(swing, 1e-300):.2g} of its swing ({swing:.3g} N·m): the "
+                            "record cannot show how the drive answers the torque"))
+    elif torque_noise > NOISE_WARN * swing:
+        checks.append(Check("torque_noise", "warn", f"the torque is noisy ({torque_noise:.3g} N·m rms, "
+                            f"{100 * torque_noise / swing:.0f} % of its swing; torque from motor current?): "
+                            "loading and unloading are told apart on the smoothed torque"))
+    else:
+        checks.append(Check("torque_noise", "ok", f"torque noise {torque_noise:.3g} N·m rms, "
+                            f"{100 * torque_noise / swing:.1f} % of its swing"))
+    if not ke:
+        cycles = reversals / 2.0
+        status = "ok" if reversals >= 2 else "warn"
+        tail = "" if reversals >= 2 else (": without a return the loop (friction, hysteresis, backlash) "
+                                          "cannot be seen")
+        checks.append(Check("reversals", status, f"{reversals} torque reversals ({cycles:g} cycles){tail}"))
+        groups = rate_groups(rates)
+        status = "ok" if len(groups) >= 2 else "warn"
+        tail = "" if len(groups) >= 2 else (": rate-dependent losses (damping) cannot be told from "
+                                            "rate-independent ones (friction)")
+        shown = ", ".join(f"{r:.3g}" for r in groups[:5])
+        checks.append(Check("loading_rates", status, f"{len(groups)} distinct loading rate(s) "
+                            f"({shown or 'none'} N·m/s){tail}"))
+    for name, x in (("torque", T), ("angle", meas.angle)):
+        found = _saturation(name, x)
+        if found:
+            checks.append(found)
+    figures = {"noise_floor_rad": noise_level(response), "torque_noise_Nm": torque_noise,
+               "reversals": reversals, "loading_rates": len(rate_groups(rates))}
+    return checks, figures
+
+
+def _locked_identity(meas, T, drive: DriveScale) -> list[Check]:
+    angle = np.asarray(meas.angle, dtype=float)
+    span = float(np.ptp(angle))
+    expected = float(np.ptp(T)) / drive.K_soft + LOST_MOTION_ALLOWANCE
+    least = float(np.ptp(T)) / drive.K_stiff
+    torque_text = f"{np.max(np.abs(T)):.3g} N·m"
+    out = []
+    if span > SPAN_FACTOR * expected:
+        out.append(Check("twist_span", "fail", f"the angle spans {_arcmin(span)}, but a locked {drive.name} "
+                         f"twists about {_arcmin(expected)} at {torque_text}: this looks like an output "
+                         "turning freely (a running or friction test), or an angle in other units "
+                         "(revolutions? rotor side, not divided by the ratio?)"))
+    elif span < least / SPAN_FACTOR:
+        out.append(Check("twist_span", "warn", f"the angle spans only {_arcmin(span)}, while a {drive.name} "
+                         f"twists at least {_arcmin(least)} at {torque_text}: an angle in other units "
+                         "(degrees read as radians?) or a torque in other units"))
+    else:
+        out.append(Check("twist_span", "ok", f"the angle spans {_arcmin(span)} at {torque_text}, possible "
+                         f"for a locked {drive.name}"))
+    rho = _rank_correlation(T, angle)
+    if abs(rho) < FOLLOW_MIN:
+        out.append(Check("angle_follows_torque", "fail", f"the angle does not follow the torque (rank "
+                         f"correlation {rho:.2f}): the output was not held by the drive alone, or the "
+                         "columns are swapped"))
+    elif rho < 0:
+        out.append(Check("angle_follows_torque", "warn", f"the angle falls as the torque rises (rank "
+                         f"correlation {rho:.2f}): angle and torque are signed the opposite ways"))
+    else:
+        out.append(Check("angle_follows_torque", "ok", f"the angle follows the torque (rank correlation "
+                         f"{rho:.2f})"))
+    return out
+
+
+def _kinematic_error_identity(meas, drive: DriveScale) -> list[Check]:
+    wg, out_angle = np.asarray(meas.wg_angle, dtype=float), np.asarray(meas.angle, dtype=float)
+    ke = np.asarray(meas.kinematic_error, dtype=float)
+    checks = []
+    scale = max(float(np.max(np.abs(out_angle))), 1.0)
+    if np.ptp(ke) <= 1e-12 * scale:
+        checks.append(Check("kinematic_error_not_zero", "fail", "the kinematic error is identically zero: "
+                            "the output angle is the wave-generator angle divided by the ratio, one encoder "
+                            "logged twice"))
+    else:
+        checks.append(Check("kinematic_error_not_zero", "ok", f"the kinematic error spans {_arcmin(np.ptp(ke))}"))
+    travel = float(np.ptp(wg / meas.ratio))
+    if travel > 0:
+        slope = float(np.polyfit(wg / meas.ratio, out_angle, 1)[0])
+        if abs(slope - 1.0) > 0.01:
+            checks.append(Check("ratio_consistent", "fail", f"the output turns {slope:.4g} times the "
+                                f"wave-generator angle divided by the ratio {meas.ratio:g}: a wrong ratio, or "
+                                "an angle in other units"))
+        else:
+            checks.append(Check("ratio_consistent", "ok", f"the output follows the wave generator through "
+                                f"the ratio {meas.ratio:g} (slope {slope:.5f})"))
+    return checks
+
+
+def wrong_test(checks) -> str:
+    """The sentence of the first failed identity check ('' when the record is the test it claims)."""
+    for c in checks:
+        if c.status == "fail" and c.check in IDENTITY:
+            return c.message
+    return ""
+
+
+def import_checks(meas) -> list[Check]:
+    """What the import options did to the rows, as checks (a user must see what was left out)."""
+    rows = meas.rows
+    total = len(meas) + rows.dropped_rows + rows.windowed_rows
+    out = []
+    if rows.dropped_rows:
+        share = rows.dropped_rows / max(total, 1)
+        out.append(Check("dropped_rows", "warn" if share > 0.05 else "ok",
+                         f"{rows.dropped_rows} of {total} rows dropped for a NaN or empty cell "
+                         f"({100 * share:.1f} %)"))
+    if rows.windowed_rows:
+        out.append(Check("window", "ok", f"{rows.windowed_rows} rows outside the time window left out"))
+    if rows.runs > 1:
+        out.append(Check("concatenated_runs", "ok", f"{rows.runs} runs joined end to end (their clock "
+                         "restarted); the drive's state is carried across the joins"))
+    if rows.time_from_rows:
+        out.append(Check("time_axis", "warn", "no time column: time is the row index over the given sample "
+                         "rate, so rate-dependent effects (damping) are not identifiable from this log"))
+    return out
+
+
+def examine(meas, drive: DriveScale) -> tuple[list[Check], dict, str]:
+    """Every check of a record before a fit: (checks, data summary, wrong-test sentence or '').
+
+    The data summary holds ``rows``, ``dropped_rows`` and the model-free noise floors
+    (``noise_floor_rad``, ``torque_noise_Nm``), the reversals and the distinct loading rates.
+    """
+    checks, figures = run_checks(meas, drive)
+    checks = import_checks(meas) + checks
+    data = {"rows": len(meas), "dropped_rows": meas.rows.dropped_rows, **figures}
+    return checks, data, wrong_test(checks)

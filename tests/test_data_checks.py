@@ -1,0 +1,126 @@
+"""Checks of a record before any fit (hdsim.io.data_checks) and the honest outcome of a
+diagnosis (hdsim.identification.outcome). Records are built here or by tests/truth.py,
+which shares no code with hdsim; expected values come from how they were built."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+import truth
+from hdsim.identification.outcome import assess
+from hdsim.io.data_checks import DriveScale, examine, noise_level
+from hdsim.io.measurement import make_measurement, save_measurement
+from hdsim.model.catalog import load_unit
+
+DRIVE = DriveScale.of(load_unit("CSG-25-100"))
+
+
+def _by_name(checks):
+    return {c.check: c for c in checks}
+
+
+@pytest.mark.parametrize("sigma", [1e-6, 1e-3, 0.5])
+def test_noise_is_estimated_without_a_model(sigma):
+    """White noise on a slow cycle with steps: the estimate is within 10 % of the σ drawn."""
+    rng = np.random.default_rng(1)
+    t = np.linspace(0.0, 10.0, 4000)
+    clean = 50.0 * sigma * (np.sin(2 * np.pi * 0.3 * t) + (t > 4.0))  # a smooth swing and one step
+    assert noise_level(clean + rng.normal(0.0, sigma, t.size)) == pytest.approx(sigma, rel=0.1)
+    coarse = 50.0 * np.sin(np.linspace(0, 2 * np.pi, 60))  # 60 samples a cycle: curvature, not noise
+    assert noise_level(coarse) < 1e-4 * np.ptp(coarse)
+
+
+def test_a_truth_stiffness_record_passes_and_its_cycle_is_counted():
+    cols, _ = truth.make_stiffness_data(set(), set(), seed=4, n_rows=2000)  # two loading rates, one cycle each
+    meas = make_measurement("stiffness", cols["time_s"], cols["torque_Nm"], cols["angle_rad"])
+    checks, data, wrong = examine(meas, DRIVE)
+    by = _by_name(checks)
+    assert wrong == ""
+    assert all(by[c].status == "ok" for c in ("twist_span", "angle_follows_torque", "torque_noise", "reversals",
+                                              "loading_rates"))
+    assert data["reversals"] == 7  # per block 0→+A→−A→+A→0 turns 3 times, and 0→+A again at the join
+    assert data["loading_rates"] == 2
+    # the truth's angle noise: 2e-6 rad white plus a 1.5e-6 rad quantiser (σ = q/√12)
+    assert data["noise_floor_rad"] == pytest.approx(math.hypot(2e-6, truth.QUANT_RAD / math.sqrt(12)), rel=0.15)
+
+
+def _friction_sweep():
+    """An 80° friction sweep at constant speed each way, torque from current with ±1.5 N·m noise."""
+    t = np.linspace(0.0, 20.0, 2000)
+    angle = math.radians(80.0) * np.abs((t / 10.0) % 2.0 - 1.0)
+    torque = 7.0 * np.sign(np.gradient(angle)) + np.random.default_rng(0).normal(0.0, 1.5, t.size)
+    return t, torque, angle
+
+
+def test_a_friction_sweep_is_not_a_stiffness_test(tmp_path, cli):
+    t, torque, angle = _friction_sweep()
+    path = save_measurement(make_measurement("stiffness", t, torque, angle), tmp_path / "sweep.csv")
+    code, out, err = cli("fit", path, "--json")
+    assert code == 2 and out == ""
+    assert len(err.strip().splitlines()) == 1 and "not a stiffness test" in err and "turning freely" in err
+    code, out, err = cli("diagnose", path, "--json")
+    assert code == 0, err
+    summary = json.loads(out)
+    assert summary["outcome"] == "wrong_test" and summary["added"] == []
+    by = {c["check"]: c for c in summary["checks"]}
+    assert by["twist_span"]["status"] == "fail" and by["torque_noise"]["status"] == "warn"
+
+
+def test_angles_in_other_units_are_caught():
+    cols, _ = truth.make_stiffness_data(set(), set(), seed=2, n_rows=800)
+    in_degrees = make_measurement("stiffness", cols["time_s"], cols["torque_Nm"], np.degrees(cols["angle_rad"]))
+    checks, _, wrong = examine(in_degrees, DRIVE)
+    assert "other units" in wrong
+    in_arcsec_as_rad = make_measurement("stiffness", cols["time_s"], cols["torque_Nm"],
+                                        cols["angle_rad"] / 206264.8)
+    checks, _, wrong = examine(in_arcsec_as_rad, DRIVE)
+    assert wrong == "" and _by_name(checks)["twist_span"].status == "warn"
+
+
+def test_kinematic_error_records_that_cannot_be_one():
+    cols, _ = truth.make_ke_data(set(), set(), seed=1, n_rows=2000)
+    ratio = 100.0
+    good = make_measurement("kinematic_error", cols["time_s"], cols["torque_Nm"], cols["output_angle_rad"],
+                            cols["wg_angle_rad"], ratio=ratio)
+    assert examine(good, DRIVE)[2] == ""
+    one_encoder = make_measurement("kinematic_error", cols["time_s"], cols["torque_Nm"],
+                                   cols["wg_angle_rad"] / ratio, cols["wg_angle_rad"], ratio=ratio)
+    assert "one encoder logged twice" in examine(one_encoder, DRIVE)[2]
+    wrong_ratio = make_measurement("kinematic_error", cols["time_s"], cols["torque_Nm"], cols["output_angle_rad"],
+                                   cols["wg_angle_rad"], ratio=50.0)
+    assert "wrong ratio" in examine(wrong_ratio, DRIVE)[2]
+
+
+def test_a_saturated_torque_channel_is_named():
+    cols, _ = truth.make_stiffness_data(set(), set(), seed=3, n_rows=1000)
+    torque = np.clip(cols["torque_Nm"], -60.0, 60.0)  # the amplifier's current limit
+    meas = make_measurement("stiffness", cols["time_s"], torque, cols["angle_rad"])
+    sat = _by_name(examine(meas, DRIVE)[0])["saturation"]
+    assert sat.status == "warn" and "maximum 60" in sat.message
+
+
+def _diagnosis(added=(), success=False, n_eff=500.0, ambiguous=(), first="hardening"):
+    return {"test": "stiffness", "added": list(added), "success": success, "ambiguous": list(ambiguous),
+            "ranking": [{"family": first, "score": -5.0, "n_eff": n_eff}]}
+
+
+@pytest.mark.parametrize("diagnosis, data, outcome, says", [
+    (_diagnosis(["hardening"], True), {"reversals": 7, "loading_rates": 2}, "found", ""),
+    (_diagnosis(["hardening"], False), {"reversals": 7, "loading_rates": 2}, "improved", ""),
+    (_diagnosis([], True), {"reversals": 7, "loading_rates": 2}, "nothing_missing", ""),
+    (_diagnosis([], False, n_eff=2.0), {"rows": 154, "reversals": 7, "loading_rates": 2}, "cannot_decide",
+     "independent samples"),
+    (_diagnosis([], False), {"reversals": 0, "loading_rates": 1}, "cannot_decide", "torque cycle"),
+    (_diagnosis([], False, first="damping"), {"reversals": 7, "loading_rates": 1}, "cannot_decide",
+     "second loading rate"),
+    (_diagnosis([], False, ambiguous=[{"families": ["friction", "backlash"], "measurement": "a slower cycle"}]),
+     {"reversals": 7, "loading_rates": 2}, "cannot_decide", "a slower cycle"),
+])
+def test_outcomes_are_honest(diagnosis, data, outcome, says):
+    got, next_measurement = assess(diagnosis, data)
+    assert got == outcome
+    assert says in next_measurement
