@@ -34,6 +34,12 @@ def test_absurd_sizes_are_refused_with_the_estimate(data, match, monkeypatch):
     assert "\n" not in str(info.value)
 
 
+@pytest.mark.parametrize("rate", [float("inf"), float("nan"), 0.0])
+def test_a_rate_that_is_not_a_finite_positive_number_is_refused(rate):
+    with pytest.raises(InputError, match="load.rate a finite number"):
+        Scenario(_locked(rate=rate), "rate.toml")
+
+
 def test_a_catalog_test_is_far_inside_the_limits():
     Scenario(_locked(cycles=3, rate=0.04), "ok.toml")
 

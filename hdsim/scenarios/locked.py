@@ -41,8 +41,8 @@ def check(data: dict, source: str) -> None:
     load = data["load"]
     if not 0.0 < load["amplitude"] <= 5.0:
         raise InputError(f"{source}: load.amplitude must be in (0, 5] (fraction of T_N)")
-    if load["cycles"] < 1 or load["rate"] <= 0:
-        raise InputError(f"{source}: load.cycles must be >= 1 and load.rate > 0")
+    if load["cycles"] < 1 or not 0.0 < load["rate"] < np.inf:  # NaN and inf fail too (a 0 s cycle)
+        raise InputError(f"{source}: load.cycles must be >= 1 and load.rate a finite number > 0")
     _check_size(load, int(data.get("output", {}).get("samples_per_segment", 100)), source)
     if "lost_motion_centre_line" in data.get("metrics", []) and load["amplitude"] <= 0.04:
         raise InputError(f"{source}: lost_motion_centre_line reads the loop between ±4 % T_N and needs "
