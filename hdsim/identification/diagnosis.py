@@ -57,6 +57,7 @@ from hdsim.identification.fit import (Evaluator, FitResult, build_model, effecti
                                       parse_effects, result_of)
 from hdsim.model import effects as fx
 from hdsim.io.measurement import Measurement
+from hdsim.io.data_checks import loading_rates, torque_legs
 from hdsim.model.drive import SLOTS
 from hdsim.identification.residuals import findings, whiteness
 
@@ -108,41 +109,12 @@ def _separating(a: str, b: str) -> str:
 
 
 def _legs(meas: Measurement):
-    """(start, stop) index pairs of monotone torque legs and their median |dT/dt|."""
-    T = np.asarray(meas.torque, dtype=float)
-    t = np.asarray(meas.time, dtype=float)
-    k = max(int(T.size // 200), 1)
-    smooth = np.convolve(T, np.ones(2 * k + 1) / (2 * k + 1), mode="same")
-    band = 0.05 * max(np.ptp(smooth), 1e-12)
-    # turning points with a dead band (ignores noise wiggles)
-    turns = [0]
-    direction = 0
-    extreme, extreme_i = smooth[0], 0
-    for i in range(1, T.size):
-        v = smooth[i]
-        if direction == 0:
-            if abs(v - smooth[0]) > band:
-                direction = 1 if v > smooth[0] else -1
-                extreme, extreme_i = v, i
-        elif direction > 0:
-            if v > extreme:
-                extreme, extreme_i = v, i
-            elif v < extreme - band:
-                turns.append(extreme_i)
-                direction, extreme, extreme_i = -1, v, i
-        else:
-            if v < extreme:
-                extreme, extreme_i = v, i
-            elif v > extreme + band:
-                turns.append(extreme_i)
-                direction, extreme, extreme_i = 1, v, i
-    turns.append(T.size)
+    """(start, stop) index pairs of monotone torque legs and their mean |dT/dt|, between
+    the turning points of the smoothed torque (a dead band set by its noise,
+    `hdsim.io.data_checks.torque_legs`)."""
+    smooth, turns = torque_legs(meas.torque)
     legs = [(a, b) for a, b in zip(turns[:-1], turns[1:]) if b - a > 2]
-    rates = []
-    for a, b in legs:
-        dt = t[b - 1] - t[a]
-        rates.append(abs(smooth[b - 1] - smooth[a]) / dt if dt > 0 else 0.0)
-    return legs, np.array(rates)
+    return legs, loading_rates(meas.time, smooth, turns)  # one rate per leg (the same b - a > 2 rule)
 
 
 def folds(meas: Measurement) -> tuple[list[np.ndarray], str]:

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from hdsim.identification.residuals import _direction as loading_direction
+from hdsim.io.data_checks import loading_direction
 from hdsim.errors import InputError
 from hdsim.io.measurement import Measurement
 from hdsim.model.drive import SLOTS, HarmonicDrive, compliance_chain

@@ -26,6 +26,7 @@ import math
 import numpy as np
 from scipy import stats
 
+from hdsim.io.data_checks import loading_direction
 from hdsim.units import ARCMIN_PER_RAD, ARCSEC_PER_RAD
 
 __all__ = ["ljung_box", "noise_floor", "whiteness", "views", "findings", "order_spectrum",
@@ -144,16 +145,6 @@ def order_spectrum(angle, r, max_order: float = 8.0, n_orders: int = 800):
     return orders, amp
 
 
-def _direction(time, torque):
-    """(sign, magnitude) of the smoothed loading rate dT/dt [N·m/s]."""
-    t = np.asarray(time, dtype=float)
-    T = np.asarray(torque, dtype=float)
-    k = max(int(T.size // 400), 1)
-    smooth = np.convolve(T, np.ones(2 * k + 1) / (2 * k + 1), mode="same")
-    rate = np.gradient(smooth, t)
-    return np.sign(rate), np.abs(rate)
-
-
 def views(meas, residual) -> dict:
     """The arrays behind the figures: residual vs torque/direction, time, rate, WG angle.
 
@@ -171,7 +162,7 @@ def views(meas, residual) -> dict:
         smoothed dT/dt), ``rate`` (its magnitude [N·m/s]) and, for a kinematic-error test,
         ``wg_angle`` [rad].
     """
-    direction, rate = _direction(meas.time, meas.torque)
+    direction, rate = loading_direction(meas.time, meas.torque)
     out = {"time": np.asarray(meas.time), "torque": np.asarray(meas.torque),
            "residual": np.asarray(residual), "direction": direction, "rate": rate}
     if meas.test == "kinematic_error":
@@ -204,7 +195,7 @@ def findings(meas, residual, max_items: int = 5) -> list[str]:
     """
     r = np.asarray(residual, dtype=float)
     T = np.asarray(meas.torque, dtype=float)
-    direction, rate = _direction(meas.time, meas.torque)
+    direction, rate = loading_direction(meas.time, meas.torque)
     Tmax = max(float(np.max(np.abs(T))), 1e-12)
     rms = float(np.sqrt(np.mean(r * r)))
     out: list[tuple[float, str]] = []

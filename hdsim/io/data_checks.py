@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Check", "DriveScale", "noise_level", "turning_points", "loading_rates", "rate_groups", "run_checks",
+__all__ = ["Check", "DriveScale", "noise_level", "turning_points", "torque_legs", "loading_direction", "loading_rates", "rate_groups", "run_checks",
            "wrong_test", "import_checks", "examine"]
 
 #: a locked drive twists at most this many times its softest catalog compliance predicts
@@ -135,6 +135,26 @@ def turning_points(x, band: float) -> list[int]:
     return turns
 
 
+def torque_legs(torque) -> tuple[np.ndarray, list[int]]:
+    """The smoothed torque and its turning points (`turning_points`), with a dead band set
+    by the torque's own noise: five times the noise left after smoothing, at least 2 % of
+    the swing, so the noise of a torque computed from motor current does not turn a leg."""
+    T = np.asarray(torque, dtype=float)
+    smooth, left = smoothed(T, noise_level(T))
+    band = max(5.0 * left, 0.02 * float(np.ptp(smooth)), 1e-12)
+    return smooth, turning_points(smooth, band)
+
+
+def loading_direction(time, torque) -> tuple[np.ndarray, np.ndarray]:
+    """(sign, magnitude) of the loading at each sample: +1 loading up, −1 down, the sign of
+    the leg between turning points (`torque_legs`), and |dT/dt| of the smoothed torque [N·m/s]."""
+    smooth, turns = torque_legs(torque)
+    sign = np.zeros(smooth.size)
+    for a, b in zip(turns[:-1], turns[1:]):
+        sign[a:b] = np.sign(smooth[b - 1] - smooth[a]) if b - a > 1 else 0.0
+    return sign, np.abs(np.gradient(smooth, np.asarray(time, dtype=float)))
+
+
 def loading_rates(time, smooth_torque, turns) -> np.ndarray:
     """Mean |dT/dt| [N·m/s] of each monotone leg between turning points."""
     t = np.asarray(time, dtype=float)
@@ -200,10 +220,8 @@ def run_checks(meas, drive: DriveScale) -> tuple[list[Check], dict]:
     ke = meas.test == "kinematic_error"
     response = np.asarray(meas.kinematic_error if ke else meas.angle, dtype=float)
     torque_noise = noise_level(T)
-    smooth_T, smooth_noise = smoothed(T, torque_noise)
+    smooth_T, turns = torque_legs(T)
     swing = float(np.ptp(smooth_T))
-    band = max(5.0 * smooth_noise, 0.02 * swing, 1e-12)
-    turns = turning_points(smooth_T, band)
     rates = loading_rates(t, smooth_T, turns)
     reversals = len(turns) - 2
     checks: list[Check] = []
