@@ -124,3 +124,33 @@ def test_outcomes_are_honest(diagnosis, data, outcome, says):
     got, next_measurement = assess(diagnosis, data)
     assert got == outcome
     assert says in next_measurement
+
+
+def test_loading_direction_survives_a_torque_from_motor_current():
+    """A triangular torque cycle with 10 % noise (torque from current): the direction is the
+    leg's, at nearly every sample (the sign of dT/dt of the raw torque is a coin toss)."""
+    from hdsim.io.data_checks import loading_direction
+
+    t = np.linspace(0.0, 8.0, 4000)
+    clean = 80.0 * (2.0 * np.abs((t / 4.0 + 0.25) % 1.0 - 0.5) * 2.0 - 1.0)  # ±80 N·m, 4 s period
+    noisy = clean + np.random.default_rng(5).normal(0.0, 8.0, t.size)
+    truth_sign = np.sign(np.gradient(clean, t))
+    sign, _ = loading_direction(t, noisy)
+    inside = np.abs(clean) < 70.0  # away from the turning points, where a leg's end is a matter of definition
+    assert np.mean(sign[inside] == truth_sign[inside]) > 0.99
+    assert np.mean(np.sign(np.gradient(noisy, t))[inside] == truth_sign[inside]) < 0.7
+
+
+def test_implausible_fits_are_named():
+    """A fitted stiffness 40× below the datasheet, a friction above rated torque, a gap of
+    degrees and an undetermined parameter are each named; a sensible fit is ok."""
+    from hdsim.identification.outcome import plausibility
+
+    odd = {"fitted": {"stiffness.K0": DRIVE.K_soft / 40, "friction.torque_max": 2 * DRIVE.rated_torque,
+                      "backlash.gap": math.radians(3.0), "friction.sigma": 1e5},
+           "uncertainty": {"friction.sigma": 3e5}, "derived": {}}
+    named = {c["check"] for c in plausibility(odd, DRIVE)}
+    assert named == {"stiffness", "friction_level", "gap", "uncertainty"}
+    sane = {"fitted": {"stiffness.K0": DRIVE.K_soft * 1.1, "friction.torque_max": 3.0},
+            "uncertainty": {"stiffness.K0": 100.0, "friction.torque_max": 0.1}, "derived": {}}
+    assert [c["status"] for c in plausibility(sane, DRIVE)] == ["ok"]

@@ -40,7 +40,9 @@ def register(subparsers) -> None:
 def run(args) -> int:
     from hdsim.cli.fit import examine_inputs, load_inputs, say_checks
     from hdsim.identification.diagnosis import diagnose
-    from hdsim.identification.outcome import assess
+    from hdsim.identification.outcome import assess, plausibility
+    from hdsim.io.data_checks import DriveScale
+    from hdsim.model.catalog import load_unit
     from hdsim.errors import InputError
 
     if args.max_rounds is not None and args.max_rounds < 0:
@@ -58,8 +60,9 @@ def run(args) -> int:
     result = diagnose(meas, effects, unit=args.unit, max_rounds=args.max_rounds, log=log)
     summary = result.to_json()
     summary["outcome"], summary["next_measurement"] = assess(summary, data)
-    summary["checks"], summary["data"] = checks, data
-    say_checks("diagnose", checks)
+    summary["checks"] = checks + plausibility(result.final.fit.summary(), DriveScale.of(load_unit(args.unit)))
+    summary["data"] = data
+    say_checks("diagnose", summary["checks"])
     if args.report:
         from hdsim.identification.report import write_report
 

@@ -73,6 +73,9 @@ def say_checks(verb: str, checks) -> None:
 
 def run(args) -> int:
     from hdsim.identification.fit import fit
+    from hdsim.identification.outcome import plausibility
+    from hdsim.io.data_checks import DriveScale
+    from hdsim.model.catalog import load_unit
     from hdsim.identification.residuals import findings, whiteness
 
     from hdsim.errors import InputError
@@ -88,9 +91,9 @@ def run(args) -> int:
     summary["parameters_file"] = str(out)
     summary["whiteness"] = whiteness(result.residual)
     summary["findings"] = findings(meas, result.residual)
-    summary["checks"] = checks
+    summary["checks"] = checks + plausibility(summary, DriveScale.of(load_unit(args.unit)))
     summary["data"] = data
-    say_checks("fit", checks)
+    say_checks("fit", summary["checks"])
     if args.json:
         from hdsim.cli import emit_json
 

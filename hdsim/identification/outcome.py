@@ -84,3 +84,52 @@ def _reversals(diagnosis_json: dict, data: dict) -> int:
     if diagnosis_json.get("test") == "kinematic_error":
         return 2
     return int(data.get("reversals", 2))
+
+
+#: a fitted stiffness this far from the datasheet's K1 … K3 (either way) is named
+STIFFNESS_FACTOR = 3.0
+#: a dead zone wider than this is no gear's backlash [rad] (catalog classes are arcminutes)
+GAP_LIMIT_RAD = 0.5 * 3.141592653589793 / 180.0
+
+
+def plausibility(fit_summary: dict, drive) -> list[dict]:
+    """Fitted parameters compared with what the drive's datasheet allows, as checks.
+
+    Parameters
+    ----------
+    fit_summary : dict
+        `hdsim.identification.fit.FitResult.summary` (``fitted``, ``uncertainty``, ``derived``).
+    drive : hdsim.io.data_checks.DriveScale
+        The datasheet numbers (rated torque, K1, K3).
+
+    Returns
+    -------
+    list of dict
+        ``{"check", "status", "message"}``: ``warn`` for a stiffness more than 3× outside
+        K1 … K3, a friction or slip torque above the rated torque, a gap of more than half a
+        degree, and each parameter whose standard uncertainty exceeds its value; one ``ok``
+        when none is found.
+    """
+    fitted, sigma, derived = fit_summary["fitted"], fit_summary["uncertainty"], fit_summary["derived"]
+    out = []
+    K = derived.get("K0_Nm_per_rad", fitted.get("stiffness.K0"))
+    if K is not None and not drive.K_soft / STIFFNESS_FACTOR <= K <= drive.K_stiff * STIFFNESS_FACTOR:
+        out.append(_warn("stiffness", f"the fitted stiffness {K:.3g} N·m/rad is {K / drive.K_soft:.2g}× the "
+                         f"datasheet's K1 ({drive.K_soft:.3g} N·m/rad) of {drive.name}: another drive, torque or "
+                         "angle in other units, or a compliant fixture in the loop"))
+    for name, value in fitted.items():
+        if "torque" in name.split(".")[-1] and abs(value) > drive.rated_torque:
+            out.append(_warn("friction_level", f"{name} = {value:.3g} N·m is above the rated torque "
+                             f"{drive.rated_torque:.3g} N·m of {drive.name}: not a friction a drive can have"))
+        if name == "backlash.gap" and value > GAP_LIMIT_RAD:
+            out.append(_warn("gap", f"the fitted gap {value * 180 / 3.141592653589793:.3g}° is no gear backlash "
+                             "(catalog classes are arcminutes): a loose coupling or a free output"))
+        if abs(sigma.get(name, 0.0)) > abs(value):
+            out.append(_warn("uncertainty", f"{name} = {value:.3g} ± {sigma[name]:.2g}: the record does not "
+                             "determine it (its uncertainty exceeds its value)"))
+    return out or [{"check": "plausibility", "status": "ok",
+                    "message": f"the fitted parameters are within what the datasheet of {drive.name} allows"}]
+
+
+def _warn(check: str, message: str) -> dict:
+    return {"check": check, "status": "warn", "message": message}

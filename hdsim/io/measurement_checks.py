@@ -259,7 +259,7 @@ def interpret_meta(
     tests = " or ".join(TESTS)
     if "test" not in meta:
         raise where.fail("no '# test:' key; expected '# test: stiffness' or "
-                         "'# test: kinematic_error' (HDF5: a 'test' attribute)")
+                         "'# test: kinematic_error' (HDF5: a 'test' attribute; a log without keys: --test)")
     test = meta["test"].strip()
     if test not in TESTS:
         close = difflib.get_close_matches(test, list(TESTS), n=1, cutoff=0.5)
@@ -272,7 +272,7 @@ def interpret_meta(
                               nonzero=True)
     elif test == "kinematic_error":
         raise where.fail("no '# ratio:' key; a kinematic_error file needs the transmission "
-                         "ratio, e.g. '# ratio: 100'")
+                         "ratio, e.g. '# ratio: 100' (or --ratio 100)")
     rated = None
     for key in RATED_KEYS:
         if key in meta:

@@ -1,0 +1,149 @@
+"""A battery of logs with the habits of real bench software, each with its expected end.
+
+Every file starts from an independent truth record (tests/truth.py, which shares no code
+with hdsim) and is written the way drive software and DAQ programs write: no ``#`` keys,
+torque from motor current with 5-20 % noise, the output angle in revolutions or from the
+rotor encoder, NaN cells, runs whose clock restarts, step tests without a clock, one
+loading rate, stick-slip jumps, a saturated current, a friction sweep labelled as a
+stiffness test, torque in amperes. Each must end in exit 0 or 2 (never a traceback or
+exit 1): refused with the sentence that says what to do, or accepted with the warning
+that says what is odd, or the outcome that says what it is.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+import truth
+
+K_T = 5.11  # N·m per A at the output (torque constant × ratio)
+RATIO = 100.0
+
+
+@pytest.fixture(scope="module")
+def record():
+    """A ±T_N locked test of a CSG-25-100-like drive, two loading rates, 1200 rows."""
+    cols, _ = truth.make_stiffness_data({"friction", "hardening"}, set(), seed=11, n_rows=1200)
+    return cols
+
+
+def _write(path, header, columns, every=1):
+    rows = zip(*[np.asarray(c)[::every] for c in columns])
+    text = ",".join(header) + "\n" + "".join(",".join("nan" if not np.isfinite(v) else repr(float(v)) for v in row)
+                                             + "\n" for row in rows)
+    path.write_text(text)
+    return path
+
+
+def _current(torque, share, seed=0):
+    """Motor current [A] for a torque, with noise of ``share`` of the torque swing."""
+    noise = np.random.default_rng(seed).normal(0.0, share * np.ptp(torque), np.size(torque))
+    return (torque + noise) / K_T
+
+
+def _run(cli, *args):
+    code, out, err = cli(*map(str, args))
+    assert code in (0, 2), err  # never a traceback, never the program's own failure
+    if code == 2:
+        assert len(err.strip().splitlines()) == 1 and out == "", err
+    return code, (json.loads(out) if code == 0 and out else None), err
+
+
+def _checks(summary):
+    return {c["check"]: c for c in summary["checks"]}
+
+
+FIT = ("--json", "--out", "f.toml")
+MAP = "time_s=t,torque_Nm={k}*iq_A,angle_rev=pos_rev"
+
+
+def test_current_torque_and_revolutions_with_the_options(record, tmp_path, cli):
+    path = _write(tmp_path / "drive.csv", ["t", "iq_A", "pos_rev"],
+                  [record["time_s"], _current(record["torque_Nm"], 0.05), record["angle_rad"] / (2 * math.pi)])
+    code, _, err = _run(cli, "fit", path, *FIT)
+    assert code == 2 and "--test" in err  # no keys: told which option gives the key
+    code, summary, err = _run(cli, "fit", path, "--test", "stiffness", "--columns", MAP.format(k=K_T), *FIT)
+    assert code == 0
+    assert all(c["status"] != "fail" for c in summary["checks"])
+    assert _checks(summary)["torque_noise"]["status"] in ("ok", "warn")
+    # the stiffness of a linear fit is the truth's K1 within the hardening's spread, not 5× off
+    assert 0.5 < summary["derived"]["K0_Nm_per_rad"] / truth.K1_NM_PER_RAD < 2.0
+
+
+def test_torque_in_amperes_is_named_implausible(record, tmp_path, cli):
+    path = _write(tmp_path / "amps.csv", ["time_s", "torque_Nm", "angle_rad"],
+                  [record["time_s"], record["torque_Nm"] / K_T / 2.0, record["angle_rad"]])
+    code, summary, _ = _run(cli, "fit", path, "--test", "stiffness", *FIT)
+    assert code == 0 and _checks(summary)["stiffness"]["status"] == "warn"
+
+
+def test_rotor_encoder_not_divided_by_the_ratio_is_a_wrong_test(record, tmp_path, cli):
+    path = _write(tmp_path / "rotor.csv", ["time_s", "torque_Nm", "angle_rad"],
+                  [record["time_s"], record["torque_Nm"], record["angle_rad"] * RATIO * 20])
+    code, _, err = _run(cli, "fit", path, "--test", "stiffness", *FIT)
+    assert code == 2 and "rotor side" in err
+    code, summary, _ = _run(cli, "diagnose", path, "--test", "stiffness", "--json")
+    assert code == 0 and summary["outcome"] == "wrong_test" and summary["added"] == []
+
+
+def test_nan_cells_are_refused_then_dropped_and_counted(record, tmp_path, cli):
+    torque = np.array(record["torque_Nm"], dtype=float)
+    torque[[40, 41, 300]] = np.nan
+    path = _write(tmp_path / "nan.csv", ["time_s", "torque_Nm", "angle_rad"],
+                  [record["time_s"], torque, record["angle_rad"]])
+    code, _, err = _run(cli, "fit", path, "--test", "stiffness", *FIT)
+    assert code == 2 and "--drop-nan" in err
+    code, summary, _ = _run(cli, "fit", path, "--test", "stiffness", "--drop-nan", *FIT)
+    assert code == 0 and summary["data"]["dropped_rows"] == 3 and summary["data"]["rows"] == 1197
+
+
+def test_concatenated_runs_and_a_log_without_a_clock(record, tmp_path, cli):
+    n = len(record["time_s"]) // 3
+    t = np.concatenate([record["time_s"][:n]] * 3)
+    path = _write(tmp_path / "runs.csv", ["time_s", "torque_Nm", "angle_rad"],
+                  [t, record["torque_Nm"][:3 * n], record["angle_rad"][:3 * n]])
+    code, _, err = _run(cli, "fit", path, "--test", "stiffness", *FIT)
+    assert code == 2 and "--concatenated" in err
+    code, summary, _ = _run(cli, "fit", path, "--test", "stiffness", "--concatenated", *FIT)
+    assert code == 0 and _checks(summary)["concatenated_runs"]["message"].startswith("3 runs")
+    steps = _write(tmp_path / "steps.csv", ["torque_Nm", "angle_arcsec"],
+                   [record["torque_Nm"], np.degrees(record["angle_rad"]) * 3600.0], every=20)
+    code, _, err = _run(cli, "fit", steps, "--test", "stiffness", *FIT)
+    assert code == 2 and "--sample-rate" in err
+    code, summary, _ = _run(cli, "fit", steps, "--test", "stiffness", "--sample-rate", "1", *FIT)
+    assert code == 0 and _checks(summary)["time_axis"]["status"] == "warn"
+
+
+def test_one_loading_rate_and_a_saturated_current_are_warned(tmp_path, cli):
+    cols, _ = truth.make_stiffness_data({"friction"}, set(), seed=12, n_rows=800, quarter_s=(1.0,))
+    current = np.clip(_current(cols["torque_Nm"], 0.0), -12.0, 12.0)  # the amplifier's limit, 61 N·m
+    path = _write(tmp_path / "limit.csv", ["t", "iq_A", "pos_rev"],
+                  [cols["time_s"], current, cols["angle_rad"] / (2 * math.pi)])
+    code, summary, _ = _run(cli, "fit", path, "--test", "stiffness", "--columns", MAP.format(k=K_T), *FIT)
+    assert code == 0
+    checks = _checks(summary)
+    assert checks["loading_rates"]["status"] == "warn" and checks["saturation"]["status"] == "warn"
+
+
+def test_a_friction_sweep_labelled_stiffness_is_not_found_or_improved(tmp_path, cli):
+    t = np.linspace(0.0, 40.0, 1600)
+    angle = np.radians(80.0) * np.abs((t / 10.0) % 2.0 - 1.0)  # output turning at constant speed each way
+    torque = 1.2 * np.sign(np.gradient(angle, t)) + 0.3 * np.sin(angle * 2 * RATIO)
+    path = _write(tmp_path / "sweep.csv", ["t", "iq_A", "pos_rev"],
+                  [t, _current(torque, 0.2), angle / (2 * math.pi)])
+    code, summary, _ = _run(cli, "diagnose", path, "--test", "stiffness", "--columns", MAP.format(k=K_T), "--json")
+    assert code == 0 and summary["outcome"] == "wrong_test"
+
+
+def test_stick_slip_jumps_are_analysed_not_refused(record, tmp_path, cli):
+    angle = np.array(record["angle_rad"], dtype=float)
+    jumps = np.zeros_like(angle)
+    jumps[::97] = 5e-6 * np.random.default_rng(3).standard_normal(jumps[::97].size)  # slips that stay
+    path = _write(tmp_path / "slip.csv", ["time_s", "torque_Nm", "angle_rad"],
+                  [record["time_s"], record["torque_Nm"], angle + np.cumsum(jumps)])
+    code, summary, _ = _run(cli, "fit", path, "--test", "stiffness", *FIT)
+    assert code == 0 and all(c["status"] != "fail" for c in summary["checks"])
