@@ -66,7 +66,7 @@ def run(args) -> int:
     if args.report:
         from hdsim.identification.report import write_report
 
-        page = write_report(result, args.report)
+        page = write_report(result, args.report, summary)
         summary["report"] = str(page)
     return _emit(args, summary)
 

@@ -1,19 +1,22 @@
 """The diagnosis report: PNG figures of every step plus an HTML and a Markdown page.
 
-``write_report(diagnosis, folder)`` writes
+``write_report(diagnosis, folder, assessment)`` writes, in the order a person reads them,
 
+- ``residual_vs_time.png``: residual vs time, every step (where stick-slip, drift and
+  the joins of concatenated runs show first);
 - ``measured_vs_model.png``: measured angle vs torque and the model of the first and the
   last step (offset removed);
 - ``residual_vs_torque.png``: residual vs torque, loading and unloading in two colours,
   first and last step;
-- ``residual_vs_time.png``: residual vs time, every step;
 - ``residual_spectrum.png``: stiffness test: amplitude spectrum of the residual vs
   frequency; kinematic-error test: residual vs wave-generator angle and its order
   spectrum;
-- ``residual_vs_rate.png``: the residual loop (unloading minus loading) per loading rate;
+- ``residual_vs_rate.png``: the residual loop (unloading minus loading) per loading rate,
+  only when the record has two rates or more (one point answers no rate question);
 - ``error_fall.png``: rms and max error per step;
-- ``index.html`` and ``index.md``: the before/after table, the ranking of every round,
-  ambiguities, whiteness and the plain-sentence findings, with the figures.
+- ``index.html`` and ``index.md``: the outcome and the data checks first, then the
+  before/after table, the ranking of every round, ambiguities, whiteness and the
+  plain-sentence findings, with the figures.
 
 Everything is written atomically. The figures are drawn with matplotlib's object API
 (no pyplot, no backend selected), so writing a report leaves the backend of the
@@ -34,7 +37,7 @@ from hdsim.units import ARCSEC_PER_RAD
 
 __all__ = ["write_report", "FIGURES"]
 
-FIGURES = ("measured_vs_model.png", "residual_vs_torque.png", "residual_vs_time.png",
+FIGURES = ("residual_vs_time.png", "measured_vs_model.png", "residual_vs_torque.png",
            "residual_spectrum.png", "residual_vs_rate.png", "error_fall.png")
 
 
@@ -45,8 +48,9 @@ def _figure(figsize: tuple[float, float]):
     return Figure(figsize=figsize)
 
 
-def _save(fig, path: Path) -> None:
+def _save(fig, path: Path) -> Path:
     save_figure(fig, path, dpi=110, bbox_inches="tight")
+    return path
 
 
 def _label(step) -> str:
@@ -60,7 +64,7 @@ def _x(meas):
     return np.asarray(meas.angle, dtype=float)
 
 
-def write_report(diagnosis, folder) -> Path:
+def write_report(diagnosis, folder, assessment: dict | None = None) -> Path:
     """Write the figures and pages of a diagnosis into a folder.
 
     Parameters
@@ -70,6 +74,9 @@ def write_report(diagnosis, folder) -> Path:
     folder : str or os.PathLike
         Output folder, created if missing; the files of `FIGURES`, ``index.md`` and
         ``index.html`` in it are replaced.
+    assessment : dict, optional
+        ``outcome``, ``next_measurement`` and ``checks`` (as ``hdsim diagnose --json``
+        gives them), shown at the top of the page.
 
     Returns
     -------
@@ -84,25 +91,37 @@ def write_report(diagnosis, folder) -> Path:
     T = np.asarray(meas.torque, dtype=float)
     t = np.asarray(meas.time, dtype=float)
     arcsec = ARCSEC_PER_RAD
+    ends = (first, last) if last is not first else (first,)  # one curve per distinct model
+    drawn = []
+
+    # residual vs time: first, it shows stick-slip, drift and joins
+    fig = _figure((10, 3.5))
+    ax = fig.subplots()
+    for step in steps:
+        ax.plot(t, step.fit.residual * arcsec, lw=0.6, label=_label(step))
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("residual [arcsec]")
+    ax.legend(fontsize=8)
+    drawn.append(_save(fig, folder / FIGURES[0]))
 
     # measured vs model
     fig = _figure((7, 4.5))
     ax = fig.subplots()
     y = _x(meas)
     ax.plot(T, (y - first.fit.offset) * arcsec, ".", ms=2, color="0.6", label="measured")
-    for step, style in ((first, "--"), (last, "-")):
+    for step, style in zip(ends, ("--", "-")[-len(ends):]):
         model = step.fit.prediction - (0 if meas.test == "stiffness" else np.asarray(meas.wg_angle) / meas.ratio)
         ax.plot(T, (model - first.fit.offset) * arcsec, style, lw=1, label=f"model: {_label(step)}")
     ax.set_xlabel("torque [N·m]")
     ax.set_ylabel("angle − offset [arcsec]")
     ax.set_title("measured vs model")
     ax.legend(fontsize=8)
-    _save(fig, folder / FIGURES[0])
+    drawn.append(_save(fig, folder / FIGURES[1]))
 
     # residual vs torque by direction
     fig = _figure((10, 4))
-    axes = fig.subplots(1, 2 if last is not first else 1, sharey=True, squeeze=False)
-    for ax, step in zip(axes[0], (first, last)):
+    axes = fig.subplots(1, len(ends), sharey=True, squeeze=False)
+    for ax, step in zip(axes[0], ends):
         v = views(meas, step.fit.residual)
         r = v["residual"] * arcsec
         ax.plot(T[v["direction"] > 0], r[v["direction"] > 0], ".", ms=2, color="tab:blue", label="loading (dT/dt > 0)")
@@ -111,25 +130,15 @@ def write_report(diagnosis, folder) -> Path:
         ax.set_title(f"residual: {_label(step)}")
         ax.set_xlabel("torque [N·m]")
     axes[0][0].set_ylabel("residual [arcsec]")
-    axes[0][0].legend(fontsize=8, markerscale=4)
-    _save(fig, folder / FIGURES[1])
-
-    # residual vs time
-    fig = _figure((10, 3.5))
-    ax = fig.subplots()
-    for step in steps:
-        ax.plot(t, step.fit.residual * arcsec, lw=0.6, label=_label(step))
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("residual [arcsec]")
-    ax.legend(fontsize=8)
-    _save(fig, folder / FIGURES[2])
+    axes[0][0].legend(fontsize=8, markerscale=4)  # the colours mean the same in every panel
+    drawn.append(_save(fig, folder / FIGURES[2]))
 
     # spectrum
     if meas.test == "kinematic_error":
         fig = _figure((10, 4))
         axes = fig.subplots(1, 2)
         wg = np.asarray(meas.wg_angle, dtype=float)
-        for step in (first, last):
+        for step in ends:
             axes[0].plot(np.mod(wg, 2 * np.pi), step.fit.residual * arcsec, ".", ms=1.5, label=_label(step))
             orders, amp = order_spectrum(wg, step.fit.residual, max_order=8.0, n_orders=400)
             axes[1].plot(orders, amp * arcsec, lw=0.8, label=_label(step))
@@ -142,7 +151,7 @@ def write_report(diagnosis, folder) -> Path:
         fig = _figure((7, 4))
         ax = fig.subplots()
         dt = float(np.median(np.diff(t)))
-        for step in (first, last):
+        for step in ends:
             r = step.fit.residual - np.mean(step.fit.residual)
             spec = np.abs(np.fft.rfft(r)) * 2.0 / r.size
             freq = np.fft.rfftfreq(r.size, dt)
@@ -151,20 +160,20 @@ def write_report(diagnosis, folder) -> Path:
         ax.set_ylabel("residual amplitude [arcsec]")
         ax.set_title("residual spectrum (white noise is flat)")
         ax.legend(fontsize=8)
-    _save(fig, folder / FIGURES[3])
+    drawn.append(_save(fig, folder / FIGURES[3]))
 
-    # loop width vs rate
-    fig = _figure((7, 4))
-    ax = fig.subplots()
-    for step in steps:
-        v = views(meas, step.fit.residual)
-        rates, widths = _loop_by_rate(v)
-        ax.plot(rates, np.array(widths) * arcsec, "o-", label=_label(step))
-    ax.set_xlabel("loading rate |dT/dt| [N·m/s]")
-    ax.set_ylabel("residual loop: unloading − loading [arcsec]")
-    ax.axhline(0, color="0.8", lw=0.8)
-    ax.legend(fontsize=8)
-    _save(fig, folder / FIGURES[4])
+    # loop width vs rate: only with two rates or more
+    loops = [(step, *_loop_by_rate(views(meas, step.fit.residual))) for step in steps]
+    if all(len(rates) >= 2 for _, rates, _ in loops):
+        fig = _figure((7, 4))
+        ax = fig.subplots()
+        for step, rates, widths in loops:
+            ax.plot(rates, np.array(widths) * arcsec, "o-", label=_label(step))
+        ax.set_xlabel("loading rate |dT/dt| [N·m/s]")
+        ax.set_ylabel("residual loop: unloading − loading [arcsec]")
+        ax.axhline(0, color="0.8", lw=0.8)
+        ax.legend(fontsize=8)
+        drawn.append(_save(fig, folder / FIGURES[4]))
 
     # error fall
     fig = _figure((7, 4))
@@ -179,12 +188,12 @@ def write_report(diagnosis, folder) -> Path:
     ax.set_ylabel("error [arcsec]")
     ax.set_yscale("log")
     ax.legend(fontsize=8)
-    _save(fig, folder / FIGURES[5])
+    drawn.append(_save(fig, folder / FIGURES[5]))
 
-    md = _markdown(diagnosis)
-    write_text_atomic(folder / "index.md", md)
+    names = [p.name for p in drawn]
+    write_text_atomic(folder / "index.md", _markdown(diagnosis, assessment or {}, names))
     page = folder / "index.html"
-    write_text_atomic(page, _html(diagnosis))
+    write_text_atomic(page, _html(diagnosis, assessment or {}, names))
     return page
 
 
@@ -249,10 +258,30 @@ def _md_table(head, rows):
     return "\n".join(lines)
 
 
-def _markdown(diagnosis) -> str:
+CHECK_HEAD = ("status", "check", "what the data say")
+
+
+def _outcome_line(assessment: dict) -> str:
+    """The outcome and what to record next, in words, or '' without an assessment."""
+    if not assessment.get("outcome"):
+        return ""
+    text = f"Outcome: {assessment['outcome'].replace('_', ' ')}"
+    return text + (f"; to decide, record {assessment['next_measurement']}" if assessment.get("next_measurement")
+                   else "")
+
+
+def _check_rows(assessment: dict) -> list:
+    return [(c["status"], c["check"], c["message"]) for c in assessment.get("checks", [])]
+
+
+def _markdown(diagnosis, assessment: dict, figures) -> str:
     d = diagnosis.to_json()
-    parts = [f"# Diagnosis of {diagnosis.measurement.source}", "",
-             f"{d['test']} test, {len(diagnosis.measurement)} rows; hold-out folds by {d['holdout']}.", "",
+    parts = [f"# Diagnosis of {diagnosis.measurement.source}", ""]
+    if _outcome_line(assessment):
+        parts += [f"**{_outcome_line(assessment)}**", ""]
+    if _check_rows(assessment):
+        parts += ["## The data", "", _md_table(CHECK_HEAD, _check_rows(assessment)), ""]
+    parts += [f"{d['test']} test, {len(diagnosis.measurement)} rows; hold-out folds by {d['holdout']}.", "",
              f"**Verdict:** {d['verdict']}", "", "## Before and after", "",
              _md_table(TABLE_HEAD, _rows(diagnosis)), ""]
     for n, effects, lines in _rounds(diagnosis):
@@ -269,7 +298,7 @@ def _markdown(diagnosis) -> str:
     w = d["whiteness"]
     parts += ["", f"Ljung–Box Q = {w['ljung_box_q']:.1f} over {w['lags']} lags, p = {w['p_value']:.3g}; "
               f"noise floor {w['noise_floor_rad'] * ARCSEC_PER_RAD:.2f} arcsec.", "", "## Figures", ""]
-    parts += [f"![{f}]({f})" for f in FIGURES]
+    parts += [f"![{f}]({f})" for f in figures]
     return "\n".join(parts) + "\n"
 
 
@@ -279,10 +308,14 @@ def _html_table(head, rows):
     return "\n".join(out) + "</table>"
 
 
-def _html(diagnosis) -> str:
+def _html(diagnosis, assessment: dict, figures) -> str:
     d = diagnosis.to_json()
-    body = [f"<h1>Diagnosis of {html.escape(str(diagnosis.measurement.source))}</h1>",
-            f"<p>{d['test']} test, {len(diagnosis.measurement)} rows; hold-out folds by "
+    body = [f"<h1>Diagnosis of {html.escape(str(diagnosis.measurement.source))}</h1>"]
+    if _outcome_line(assessment):
+        body.append(f"<p><b>{html.escape(_outcome_line(assessment))}</b></p>")
+    if _check_rows(assessment):
+        body += ["<h2>The data</h2>", _html_table(CHECK_HEAD, _check_rows(assessment))]
+    body += [f"<p>{d['test']} test, {len(diagnosis.measurement)} rows; hold-out folds by "
             f"{html.escape(d['holdout'])}.</p>",
             f"<p><b>Verdict:</b> {html.escape(d['verdict'])}</p>", "<h2>Before and after</h2>",
             _html_table(TABLE_HEAD, _rows(diagnosis))]
@@ -296,7 +329,7 @@ def _html(diagnosis) -> str:
                 "".join(f"<li>{html.escape(s)}</li>" for s in d["findings"]["baseline"]) +
                 "</ul><p>Final model:</p><ul>" +
                 "".join(f"<li>{html.escape(s)}</li>" for s in d["findings"]["final"]) + "</ul>")
-    body.append("<h2>Figures</h2>" + "".join(f'<p><img src="{f}" alt="{f}"></p>' for f in FIGURES))
+    body.append("<h2>Figures</h2>" + "".join(f'<p><img src="{f}" alt="{f}"></p>' for f in figures))
     style = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}"
              "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px;"
              "font-size:90%}img{max-width:100%}")
