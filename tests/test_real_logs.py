@@ -147,3 +147,17 @@ def test_stick_slip_jumps_are_analysed_not_refused(record, tmp_path, cli):
                   [record["time_s"], record["torque_Nm"], angle + np.cumsum(jumps)])
     code, summary, _ = _run(cli, "fit", path, "--test", "stiffness", *FIT)
     assert code == 0 and all(c["status"] != "fail" for c in summary["checks"])
+
+
+def test_the_answer_does_not_depend_on_the_unit_named(record):
+    """The fit starts from what the record says (loading slope, loop width, step), not from
+    the unit: the smallest and the largest built-in unit give the same friction and stiffness."""
+    from hdsim.identification.fit import fit
+    from hdsim.io.measurement import make_measurement
+
+    every = slice(None, None, 3)  # 400 rows are enough to tell
+    meas = make_measurement("stiffness", record["time_s"][every], record["torque_Nm"][every],
+                            record["angle_rad"][every])
+    small, large = (fit(meas, ["friction", "hardening"], unit=u) for u in ("CSG-14-100", "CSG-32-100"))
+    for name, value in small.internal.items():
+        assert large.internal[name] == pytest.approx(value, rel=1e-3), name
