@@ -124,8 +124,8 @@ def write_report(diagnosis, folder, assessment: dict | None = None) -> Path:
     for ax, step in zip(axes[0], ends):
         v = views(meas, step.fit.residual)
         r = v["residual"] * arcsec
-        ax.plot(T[v["direction"] > 0], r[v["direction"] > 0], ".", ms=2, color="tab:blue", label="loading (dT/dt > 0)")
-        ax.plot(T[v["direction"] <= 0], r[v["direction"] <= 0], ".", ms=2, color="tab:red", label="unloading (dT/dt ≤ 0)")
+        ax.plot(T[v["direction"] > 0], r[v["direction"] > 0], ".", ms=2, color="tab:blue", label="loading")
+        ax.plot(T[v["direction"] <= 0], r[v["direction"] <= 0], ".", ms=2, color="tab:red", label="unloading")
         ax.axvline(0, color="0.8", lw=0.8)
         ax.set_title(f"residual: {_label(step)}")
         ax.set_xlabel("torque [N·m]")

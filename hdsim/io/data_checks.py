@@ -23,8 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Check", "DriveScale", "noise_level", "turning_points", "torque_legs", "loading_direction", "loading_rates", "rate_groups", "run_checks",
-           "wrong_test", "import_checks", "examine"]
+__all__ = ["Check", "DriveScale", "noise_level", "turning_points", "torque_legs", "loading_direction",
+           "loading_rates", "rate_groups", "run_checks", "wrong_test", "import_checks", "examine"]
 
 #: a locked drive twists at most this many times its softest catalog compliance predicts
 #: (K1 over the whole torque swing, plus a generous lost motion) before the record is
