@@ -41,14 +41,12 @@ def run(args) -> int:
     from hdsim.cli.fit import examine_inputs, load_inputs, say_checks
     from hdsim.identification.diagnosis import diagnose
     from hdsim.identification.outcome import assess, plausibility
-    from hdsim.io.data_checks import DriveScale
-    from hdsim.model.catalog import load_unit
     from hdsim.errors import InputError
 
     if args.max_rounds is not None and args.max_rounds < 0:
         raise InputError("--max-rounds must be 0 or more")
     meas, effects = load_inputs(args)
-    checks, data, wrong = examine_inputs(meas, args)
+    checks, data, wrong, scale = examine_inputs(meas, args)
     if wrong:  # not the test it claims: say what it looks like, fit nothing
         return _emit(args, {"test": meas.test, "outcome": "wrong_test", "checks": checks, "data": data,
                             "next_measurement": "", "baseline": None, "ranking": [], "added": [],
@@ -60,7 +58,7 @@ def run(args) -> int:
     result = diagnose(meas, effects, unit=args.unit, max_rounds=args.max_rounds, log=log)
     summary = result.to_json()
     summary["outcome"], summary["next_measurement"] = assess(summary, data)
-    summary["checks"] = checks + plausibility(result.final.fit.summary(), DriveScale.of(load_unit(args.unit)))
+    summary["checks"] = checks + plausibility(result.final.fit.summary(), scale)
     summary["data"] = data
     say_checks("diagnose", summary["checks"])
     if args.report:

@@ -54,13 +54,14 @@ def load_inputs(args):
 
 
 def examine_inputs(meas, args):
-    """(checks, data summary, wrong-test sentence) of a record against the named drive
-    (`hdsim.io.data_checks.examine`), the checks as JSON objects."""
+    """(checks as JSON objects, data summary, wrong-test sentence, the drive's
+    `hdsim.io.data_checks.DriveScale`) of a record against the named drive."""
     from hdsim.io.data_checks import DriveScale, examine
     from hdsim.model.catalog import load_unit
 
-    checks, data, wrong = examine(meas, DriveScale.of(load_unit(args.unit)))
-    return [c.to_json() for c in checks], data, wrong
+    scale = DriveScale.of(load_unit(args.unit))
+    checks, data, wrong = examine(meas, scale)
+    return [c.to_json() for c in checks], data, wrong, scale
 
 
 def say_checks(verb: str, checks) -> None:
@@ -74,14 +75,12 @@ def say_checks(verb: str, checks) -> None:
 def run(args) -> int:
     from hdsim.identification.fit import fit
     from hdsim.identification.outcome import plausibility
-    from hdsim.io.data_checks import DriveScale
-    from hdsim.model.catalog import load_unit
     from hdsim.identification.residuals import findings, whiteness
 
     from hdsim.errors import InputError
 
     meas, effects = load_inputs(args)
-    checks, data, wrong = examine_inputs(meas, args)
+    checks, data, wrong, scale = examine_inputs(meas, args)
     if wrong:
         raise InputError(f"{meas.source}: this is not a {meas.test} test: {wrong}")
     result = fit(meas, effects, unit=args.unit)
@@ -91,7 +90,7 @@ def run(args) -> int:
     summary["parameters_file"] = str(out)
     summary["whiteness"] = whiteness(result.residual)
     summary["findings"] = findings(meas, result.residual)
-    summary["checks"] = checks + plausibility(summary, DriveScale.of(load_unit(args.unit)))
+    summary["checks"] = checks + plausibility(summary, scale)
     summary["data"] = data
     say_checks("fit", summary["checks"])
     if args.json:
