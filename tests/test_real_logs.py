@@ -45,8 +45,8 @@ def _current(torque, share, seed=0):
     return (torque + noise) / K_T
 
 
-def _run(cli, *args):
-    code, out, err = cli(*map(str, args))
+def _run(cli, cwd, *args):
+    code, out, err = cli(*map(str, args), cwd=cwd)  # the fitted file (--out) lands in cwd
     assert code in (0, 2), err  # never a traceback, never the program's own failure
     if code == 2:
         assert len(err.strip().splitlines()) == 1 and out == "", err
@@ -64,9 +64,9 @@ MAP = "time_s=t,torque_Nm={k}*iq_A,angle_rev=pos_rev"
 def test_current_torque_and_revolutions_with_the_options(record, tmp_path, cli):
     path = _write(tmp_path / "drive.csv", ["t", "iq_A", "pos_rev"],
                   [record["time_s"], _current(record["torque_Nm"], 0.05), record["angle_rad"] / (2 * math.pi)])
-    code, _, err = _run(cli, "fit", path, *FIT)
+    code, _, err = _run(cli, tmp_path, "fit", path, *FIT)
     assert code == 2 and "--test" in err  # no keys: told which option gives the key
-    code, summary, err = _run(cli, "fit", path, "--test", "stiffness", "--columns", MAP.format(k=K_T), *FIT)
+    code, summary, err = _run(cli, tmp_path, "fit", path, "--test", "stiffness", "--columns", MAP.format(k=K_T), *FIT)
     assert code == 0
     assert all(c["status"] != "fail" for c in summary["checks"])
     assert _checks(summary)["torque_noise"]["status"] in ("ok", "warn")
@@ -77,16 +77,16 @@ def test_current_torque_and_revolutions_with_the_options(record, tmp_path, cli):
 def test_torque_in_amperes_is_named_implausible(record, tmp_path, cli):
     path = _write(tmp_path / "amps.csv", ["time_s", "torque_Nm", "angle_rad"],
                   [record["time_s"], record["torque_Nm"] / K_T / 2.0, record["angle_rad"]])
-    code, summary, _ = _run(cli, "fit", path, "--test", "stiffness", *FIT)
+    code, summary, _ = _run(cli, tmp_path, "fit", path, "--test", "stiffness", *FIT)
     assert code == 0 and _checks(summary)["stiffness"]["status"] == "warn"
 
 
 def test_rotor_encoder_not_divided_by_the_ratio_is_a_wrong_test(record, tmp_path, cli):
     path = _write(tmp_path / "rotor.csv", ["time_s", "torque_Nm", "angle_rad"],
                   [record["time_s"], record["torque_Nm"], record["angle_rad"] * RATIO * 20])
-    code, _, err = _run(cli, "fit", path, "--test", "stiffness", *FIT)
+    code, _, err = _run(cli, tmp_path, "fit", path, "--test", "stiffness", *FIT)
     assert code == 2 and "rotor side" in err
-    code, summary, _ = _run(cli, "diagnose", path, "--test", "stiffness", "--json")
+    code, summary, _ = _run(cli, tmp_path, "diagnose", path, "--test", "stiffness", "--json")
     assert code == 0 and summary["outcome"] == "wrong_test" and summary["added"] == []
 
 
@@ -95,9 +95,9 @@ def test_nan_cells_are_refused_then_dropped_and_counted(record, tmp_path, cli):
     torque[[40, 41, 300]] = np.nan
     path = _write(tmp_path / "nan.csv", ["time_s", "torque_Nm", "angle_rad"],
                   [record["time_s"], torque, record["angle_rad"]])
-    code, _, err = _run(cli, "fit", path, "--test", "stiffness", *FIT)
+    code, _, err = _run(cli, tmp_path, "fit", path, "--test", "stiffness", *FIT)
     assert code == 2 and "--drop-nan" in err
-    code, summary, _ = _run(cli, "fit", path, "--test", "stiffness", "--drop-nan", *FIT)
+    code, summary, _ = _run(cli, tmp_path, "fit", path, "--test", "stiffness", "--drop-nan", *FIT)
     assert code == 0 and summary["data"]["dropped_rows"] == 3 and summary["data"]["rows"] == 1197
 
 
@@ -106,15 +106,15 @@ def test_concatenated_runs_and_a_log_without_a_clock(record, tmp_path, cli):
     t = np.concatenate([record["time_s"][:n]] * 3)
     path = _write(tmp_path / "runs.csv", ["time_s", "torque_Nm", "angle_rad"],
                   [t, record["torque_Nm"][:3 * n], record["angle_rad"][:3 * n]])
-    code, _, err = _run(cli, "fit", path, "--test", "stiffness", *FIT)
+    code, _, err = _run(cli, tmp_path, "fit", path, "--test", "stiffness", *FIT)
     assert code == 2 and "--concatenated" in err
-    code, summary, _ = _run(cli, "fit", path, "--test", "stiffness", "--concatenated", *FIT)
+    code, summary, _ = _run(cli, tmp_path, "fit", path, "--test", "stiffness", "--concatenated", *FIT)
     assert code == 0 and _checks(summary)["concatenated_runs"]["message"].startswith("3 runs")
     steps = _write(tmp_path / "steps.csv", ["torque_Nm", "angle_arcsec"],
                    [record["torque_Nm"], np.degrees(record["angle_rad"]) * 3600.0], every=20)
-    code, _, err = _run(cli, "fit", steps, "--test", "stiffness", *FIT)
+    code, _, err = _run(cli, tmp_path, "fit", steps, "--test", "stiffness", *FIT)
     assert code == 2 and "--sample-rate" in err
-    code, summary, _ = _run(cli, "fit", steps, "--test", "stiffness", "--sample-rate", "1", *FIT)
+    code, summary, _ = _run(cli, tmp_path, "fit", steps, "--test", "stiffness", "--sample-rate", "1", *FIT)
     assert code == 0 and _checks(summary)["time_axis"]["status"] == "warn"
 
 
@@ -123,7 +123,7 @@ def test_one_loading_rate_and_a_saturated_current_are_warned(tmp_path, cli):
     current = np.clip(_current(cols["torque_Nm"], 0.0), -12.0, 12.0)  # the amplifier's limit, 61 N·m
     path = _write(tmp_path / "limit.csv", ["t", "iq_A", "pos_rev"],
                   [cols["time_s"], current, cols["angle_rad"] / (2 * math.pi)])
-    code, summary, _ = _run(cli, "fit", path, "--test", "stiffness", "--columns", MAP.format(k=K_T), *FIT)
+    code, summary, _ = _run(cli, tmp_path, "fit", path, "--test", "stiffness", "--columns", MAP.format(k=K_T), *FIT)
     assert code == 0
     checks = _checks(summary)
     assert checks["loading_rates"]["status"] == "warn" and checks["saturation"]["status"] == "warn"
@@ -135,7 +135,7 @@ def test_a_friction_sweep_labelled_stiffness_is_not_found_or_improved(tmp_path, 
     torque = 1.2 * np.sign(np.gradient(angle, t)) + 0.3 * np.sin(angle * 2 * RATIO)
     path = _write(tmp_path / "sweep.csv", ["t", "iq_A", "pos_rev"],
                   [t, _current(torque, 0.2), angle / (2 * math.pi)])
-    code, summary, _ = _run(cli, "diagnose", path, "--test", "stiffness", "--columns", MAP.format(k=K_T), "--json")
+    code, summary, _ = _run(cli, tmp_path, "diagnose", path, "--test", "stiffness", "--columns", MAP.format(k=K_T), "--json")
     assert code == 0 and summary["outcome"] == "wrong_test"
 
 
@@ -145,7 +145,7 @@ def test_stick_slip_jumps_are_analysed_not_refused(record, tmp_path, cli):
     jumps[::97] = 5e-6 * np.random.default_rng(3).standard_normal(jumps[::97].size)  # slips that stay
     path = _write(tmp_path / "slip.csv", ["time_s", "torque_Nm", "angle_rad"],
                   [record["time_s"], record["torque_Nm"], angle + np.cumsum(jumps)])
-    code, summary, _ = _run(cli, "fit", path, "--test", "stiffness", *FIT)
+    code, summary, _ = _run(cli, tmp_path, "fit", path, "--test", "stiffness", *FIT)
     assert code == 0 and all(c["status"] != "fail" for c in summary["checks"])
 
 
