@@ -213,6 +213,8 @@ class FitResult:
         """The fitted parameter set as TOML (see the module doc and `load_fitted`)."""
         import tomli_w
 
+        from hdsim.model.drive_file import drive_table
+
         doc = {
             "format": "hdsim-fit-1",
             "unit": self.unit,
@@ -225,9 +227,9 @@ class FitResult:
             "fit": {"rows": self.n, "rmse_rad": self.rmse_rad, "max_abs_error_rad": self.max_abs_rad,
                     "bic": self.bic, "n_params": self.n_params},
         }
-        drive_file = self.model.provenance.get("drive_file")
-        if drive_file:  # a drive that is no built-in unit: the file's table rebuilds it
-            doc["drive"] = dict(drive_file["table"])
+        table = drive_table(self.model)
+        if table:  # a drive that is no built-in unit: the file's table rebuilds it
+            doc["drive"] = table
         head = ("# hdsim fitted parameter set. Load with hdsim.identification.fit.load_fitted(path); the\n"
                 "# [parameters] table holds dotted overrides of the unit, in SI units.\n")
         return head + tomli_w.dumps(doc)

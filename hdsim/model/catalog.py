@@ -289,7 +289,8 @@ def load_unit(name_or_path: str | os.PathLike | None = None) -> HarmonicDrive:
     -------
     HarmonicDrive
         The calibrated model. A built-in unit is cached (the same object for the same
-        name); a drive file is read anew on every call.
+        name); so is a drive file until it changes (its modification time or size), so
+        the several calls of one command read and calibrate it once.
 
     Raises
     ------
@@ -298,9 +299,24 @@ def load_unit(name_or_path: str | os.PathLike | None = None) -> HarmonicDrive:
         missing or refused (one line naming the file and the key).
     """
     if is_drive_file(name_or_path):
-        from hdsim.model.drive_file import load_drive_file  # same layer; drive_file imports this module
-
-        return load_drive_file(name_or_path)
+        try:
+            stat = os.stat(name_or_path)
+        except (OSError, ValueError):  # missing or unreadable: the reader says so in one line
+            return _drive_file(os.fspath(name_or_path))
+        return _cached_drive_file(os.fspath(name_or_path), os.path.realpath(name_or_path),
+                                  stat.st_mtime_ns, stat.st_size)
     if name_or_path is not None and not isinstance(name_or_path, str):
         raise InputError(f"a unit is a built-in name or a drive file path, got {type(name_or_path).__name__}")
     return _build(name_or_path or default_unit())
+
+
+def _drive_file(path: str) -> HarmonicDrive:
+    from hdsim.model.drive_file import load_drive_file  # same layer; drive_file imports this module
+
+    return load_drive_file(path)
+
+
+@functools.lru_cache(maxsize=32)
+def _cached_drive_file(path: str, real_path: str, mtime_ns: int, size: int) -> HarmonicDrive:
+    """`_drive_file`, once per file version (the key holds its real path, time and size)."""
+    return _drive_file(path)

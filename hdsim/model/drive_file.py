@@ -462,6 +462,22 @@ def drive_from_table(table: dict, source: str) -> HarmonicDrive:
     return replace(model, provenance=catalog._read_only(provenance))
 
 
+def drive_table(model: HarmonicDrive) -> dict | None:
+    """The drive-file table a model was built from, as plain dicts (for a run or fit file to
+    store, and `drive_from_table` to rebuild it); None for a built-in unit."""
+    note = model.provenance.get("drive_file")
+    return None if note is None else _plain(note["table"])
+
+
+def _plain(value):
+    """A read-only provenance table as plain dicts and lists (what TOML writers take)."""
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
 def _gap(values: dict, model: HarmonicDrive, unit: str) -> float:
     """Backlash gap [rad] that makes the ±4 % T_N lost motion the file's value.
 

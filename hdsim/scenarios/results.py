@@ -35,7 +35,7 @@ from hdsim.atomic import atomic_path
 from hdsim.errors import InputError
 from hdsim.model.catalog import load_unit
 from hdsim.model.drive import HarmonicDrive
-from hdsim.model.drive_file import drive_from_table
+from hdsim.model.drive_file import drive_from_table, drive_table
 from hdsim.model.effects import make_effect
 from hdsim.scenarios.scenario import Scenario
 from hdsim.simulation.solver import SimulationResult
@@ -77,10 +77,10 @@ def write_run_file(path, run) -> Path:
             f.create_group("effects").attrs.update({s: e.id for s, e in run.model.effects().items()})
             f.create_group("scenario").attrs["toml"] = tomli_w.dumps(run.scenario.data)
             f.create_group("solver").attrs.update({k: v for k, v in result.solver.items()})
-            note = run.model.provenance.get("drive_file")
-            if note:  # the unit is not a built-in one: keep what rebuilds it
-                f.create_group("drive_file").attrs.update(toml=tomli_w.dumps(_plain(note["table"])),
-                                                          path=str(note["path"]))
+            table = drive_table(run.model)
+            if table:  # the unit is not a built-in one: keep what rebuilds it
+                f.create_group("drive_file").attrs.update(toml=tomli_w.dumps(table),
+                                                          path=str(run.model.provenance["drive_file"]["path"]))
     return path
 
 
@@ -167,11 +167,3 @@ def stored_model(unit: str, params: dict, effects: dict, drive_file: tuple | Non
     base = load_unit(unit) if drive_file is None else drive_from_table(*drive_file)
     return base.with_effects(**slots).with_updates(rest)
 
-
-def _plain(value):
-    """A read-only provenance table as plain dicts and lists (for `tomli_w`)."""
-    if isinstance(value, dict):
-        return {str(k): _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    return value
