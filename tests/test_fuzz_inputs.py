@@ -31,6 +31,7 @@ test per bug the fuzzer found, with the minimal input.
 
 from __future__ import annotations
 
+import json
 import math
 import os
 
@@ -116,19 +117,26 @@ _COLUMNS = ["time_s", "torque_Nm", "temperature_C", "wg_angle_rev"] + [
 def measurement_csv(draw, mutate: bool = True) -> tuple[bytes, dict | None]:
     """A CSV measurement, valid but for mutations (``mutate``), and sometimes a column map."""
     rare = st.integers(0, 3).map(lambda i: i == 3) if mutate else st.just(False)  # one time in four
-    test = draw(st.sampled_from(["stiffness", "kinematic_error"]) if not draw(rare) else
+    test = draw(st.sampled_from(["stiffness", "kinematic_error", "running_torque"]) if not draw(rare) else
                 st.sampled_from(["stiffness ", "Stiffness", "junk", "", None]))
     meta = [] if test is None else [f"# test: {test}"]
-    if draw(st.booleans()) or (test == "kinematic_error" and not draw(rare)):
+    if draw(st.booleans()) or (test in ("kinematic_error", "running_torque") and not draw(rare)):
         meta.append(f"# ratio: {draw(_NUMBER_TEXT) if draw(rare) else '100'}")
+    if test == "running_torque" and draw(st.booleans()):
+        meta.append(f"# torque_side: {draw(_TEXT) if draw(rare) else draw(st.sampled_from(['input', 'output']))}")
     if draw(st.booleans()):
         meta.append(f"# rated_torque_Nm: {draw(_NUMBER_TEXT) if draw(rare) else '67'}")
     bad = st.sampled_from(["#", "", "# no colon", "# : x", "# test: x", "#ratio:1", "# test:"])
     meta += draw(st.lists(st.one_of(st.builds("# {}: {}".format, _TEXT, _TEXT), bad), max_size=draw(rare) * 2))
     meta = draw(st.permutations(meta))
     unit = draw(st.sampled_from(_ANGLES))
-    header = ["time_s", "torque_Nm"] + ([f"angle_{unit}"] if test != "kinematic_error"
-                                        else [f"wg_angle_{unit}", f"output_angle_{unit}"])
+    if test == "running_torque":  # one angle or both, and sometimes the temperature
+        angles = draw(st.sampled_from([["wg_angle"], ["output_angle"], ["wg_angle", "output_angle"]]))
+        header = ["time_s", "torque_Nm"] + [f"{a}_{unit}" for a in angles]
+        header += ["temperature_C"] if draw(st.booleans()) else []
+    else:
+        header = ["time_s", "torque_Nm"] + ([f"angle_{unit}"] if test != "kinematic_error"
+                                            else [f"wg_angle_{unit}", f"output_angle_{unit}"])
     odd = st.sampled_from(["a\rb", '"t,s"', '"open', " ", "time_s ", "ANGLE_RAD", "x" * 140_000])
     header += draw(st.lists(st.one_of(odd, st.sampled_from(_COLUMNS), _TEXT), max_size=draw(rare) * 2))
     if draw(rare):
@@ -139,7 +147,8 @@ def measurement_csv(draw, mutate: bool = True) -> tuple[bytes, dict | None]:
     time, values = np.cumsum(rng.uniform(1e-3, 10.0, n)), rng.normal(0.0, 100.0, (n, len(header)))
     if not mutate or draw(st.booleans()):  # a record that looks like its test: a torque cycle and its twist
         torque, wg = 60.0 * np.sin(np.linspace(0.0, 2.0 * np.pi, n)), np.linspace(0.0, 20.0, n)
-        rad = {"torque_Nm": torque, "angle": torque / 3e4 + 1e-3, "wg_angle": wg, "output_angle": wg / 100.0}
+        rad = {"torque_Nm": torque, "angle": torque / 3e4 + 1e-3, "wg_angle": wg, "output_angle": wg / 100.0,
+               "temperature_C": np.full(n, 25.0)}
         for c, name in enumerate(header):
             base, _, unit = name.rpartition("_")
             if name in rad or base in rad:
@@ -244,6 +253,24 @@ def test_fit_cli_exits_0_or_2_with_one_line(fuzz_dir, capsys, case):
         assert len(err) == 1 and err[0].startswith("hdsim fit: error: "), err
     else:
         assert all(line.startswith("hdsim fit: warn: ") for line in err), err
+
+
+@_settings(15)
+@given(case=measurement_csv(mutate=False).filter(lambda c: b"# test: running_torque" in c[0]))
+def test_diagnose_cli_on_a_sweep_exits_0_or_2_with_one_line(fuzz_dir, capsys, case):
+    raw, _ = case
+    path = fuzz_dir / "sweep.csv"
+    path.write_bytes(raw)
+    capsys.readouterr()
+    code = main(["diagnose", str(path), "--json"])
+    event(f"exit {code}")
+    captured = capsys.readouterr()
+    err = captured.err.strip().splitlines()
+    assert code in (0, 2), err
+    if code == 2:
+        assert len(err) == 1 and err[0].startswith("hdsim diagnose: error: "), err
+    else:
+        assert json.loads(captured.out)["test"] == "running_torque"
 
 
 # --------------------------------------------------------------------------- 2. scenarios

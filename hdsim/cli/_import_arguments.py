@@ -16,6 +16,8 @@ reading a log from other bench software (nothing needs editing):
   --concatenated                 several runs whose clock restarts: joined end to end
   --sample-rate 1                a log without a time column (a step test point by point):
                                  time = row / rate
+  --test running_torque --ratio 100 --meta torque_side=output
+                                 a friction sweep whose torque is on the output shaft
 """
 
 
@@ -24,7 +26,7 @@ def add_import_arguments(parser) -> None:
     group = parser.add_argument_group("reading the log (see the notes below)")
     group.add_argument("--columns", default=None, metavar="MAP",
                        help="column map for another bench, e.g. time_s=t,torque_Nm=5.11*iq_A,angle_deg=pos")
-    group.add_argument("--test", default=None, choices=("stiffness", "kinematic_error"),
+    group.add_argument("--test", default=None, choices=("stiffness", "kinematic_error", "running_torque"),
                        help="the test the log holds (sets '# test')")
     group.add_argument("--ratio", default=None, type=float, metavar="N", help="transmission ratio (sets '# ratio')")
     group.add_argument("--rated-torque", default=None, type=float, metavar="T_N",

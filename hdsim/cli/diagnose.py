@@ -57,14 +57,26 @@ def run(args) -> int:
 
     result = diagnose(meas, effects, unit=args.unit, max_rounds=args.max_rounds, log=log)
     summary = result.to_json()
-    summary["outcome"], summary["next_measurement"] = assess(summary, data)
-    summary["checks"] = checks + plausibility(result.final.fit.summary(), scale)
+    if meas.test == "running_torque":
+        from hdsim.identification.running_diagnosis import running_limits
+        from hdsim.identification.running_fit import running_plausibility
+
+        summary["outcome"], summary["next_measurement"] = assess(summary, data, limits=running_limits)
+        summary["checks"] = checks + running_plausibility(result.final.fit, scale)
+    else:
+        summary["outcome"], summary["next_measurement"] = assess(summary, data)
+        summary["checks"] = checks + plausibility(result.final.fit.summary(), scale)
     summary["data"] = data
     say_checks("diagnose", summary["checks"])
     if args.report:
-        from hdsim.identification.report import write_report
+        if meas.test == "running_torque":
+            from hdsim.identification.running_report import write_running_report
 
-        page = write_report(result, args.report, summary)
+            page = write_running_report(result, args.report, summary, scale.running_torque or None)
+        else:
+            from hdsim.identification.report import write_report
+
+            page = write_report(result, args.report, summary)
         summary["report"] = str(page)
     return _emit(args, summary)
 
@@ -83,20 +95,24 @@ def _emit(args, summary) -> int:
 
 
 def _print(s) -> None:
+    key, unit = ("rmse_Nm", "N·m") if s["test"] == "running_torque" else ("rmse_rad", "rad")
     print(f"{s['test']} test: baseline {', '.join(s['baseline']['effects']) or '(base model)'}, "
-          f"rms {s['baseline']['rmse_rad']:.3g} rad")
+          f"rms {s['baseline'][key]:.3g} {unit}")
     print("ranking (first round, lower score is better):")
     for c in s["ranking"]:
-        print(f"  {c['family']:<16} {c['effect']:<10} score {c['score']:10.1f}  rms {c['rmse_rad']:.3g} rad"
+        if c["score"] is None:
+            print(f"  {c['family']:<16} {c['effect']:<10} {c['why']}")
+            continue
+        print(f"  {c['family']:<16} {c['effect']:<10} score {c['score']:10.1f}  rms {c[key]:.3g} {unit}"
               f"  {c['why']}")
     print(f"added: {', '.join(s['added']) or 'nothing'}")
     for a in s["ambiguous"]:
         print(f"ambiguous: {a['families'][0]} vs {a['families'][1]}; to separate them: {a['measurement']}")
-    print(f"final: {', '.join(s['final']['effects']) or '(base model)'}, rms {s['final']['rmse_rad']:.3g} rad")
+    print(f"final: {', '.join(s['final']['effects']) or '(base model)'}, rms {s['final'][key]:.3g} {unit}")
     print(s["verdict"])
     print(f"outcome: {s['outcome']}" + (f"; to decide, record {s['next_measurement']}" if s["next_measurement"]
                                          else ""))
-    for line in s["findings"]["final"]:
+    for line in s.get("findings", {}).get("final", []):
         print(f"  - {line}")
     if "report" in s:
         print(f"report: {s['report']}")

@@ -45,12 +45,23 @@ def load_inputs(args):
     from hdsim.cli._import_arguments import import_options
     from hdsim.io.measurement import load_measurement, parse_column_map
 
+    from hdsim.errors import InputError
+    from hdsim.model.running_terms import parse_running_effects
+
     columns = parse_column_map(args.columns) if args.columns else None
-    effects = parse_effects(args.effects)
+    try:  # a misspelt family: one line, exit 2, before reading anything big
+        parse_effects(args.effects)
+    except InputError as error:
+        try:  # ... unless it names a running-torque family (ripple), which only the file can confirm
+            parse_running_effects(args.effects)
+        except InputError:
+            raise error from None
     options = import_options(args)
     load_unit(args.unit)  # unknown unit: one line, exit 2, before reading anything big
     meas = load_measurement(args.data, columns, **vars(options))
-    return meas, effects
+    if meas.test == "running_torque":  # its own families (friction, damping, ripple)
+        return meas, parse_running_effects(args.effects)
+    return meas, parse_effects(args.effects)
 
 
 def examine_inputs(meas, args):
@@ -83,6 +94,8 @@ def run(args) -> int:
     checks, data, wrong, scale = examine_inputs(meas, args)
     if wrong:
         raise InputError(f"{meas.source}: this is not a {meas.test} test: {wrong}")
+    if meas.test == "running_torque":
+        return _run_running(args, meas, effects, checks, data, scale)
     result = fit(meas, effects, unit=args.unit)
     out = Path(args.out) if args.out else Path(Path(args.data).name).with_suffix(".fit.toml")
     result.save(out)
@@ -109,5 +122,39 @@ def run(args) -> int:
     for line in summary["findings"]:
         print(f"  - {line}")
     print(f"  fitted parameter set: {out}")
+    sys.stdout.flush()
+    return 0
+
+
+def _run_running(args, meas, effects, checks, data, scale) -> int:
+    """``hdsim fit`` on a running-torque test: the law, its two figures and the fit file."""
+    from hdsim.identification.running_fit import fit_running, running_plausibility
+    from hdsim.identification.running_report import fit_figures
+
+    result = fit_running(meas, effects)
+    out = Path(args.out) if args.out else Path(Path(args.data).name).with_suffix(".fit.toml")
+    result.save(out)
+    figures = fit_figures(result, out.with_suffix(""), scale.running_torque or None)
+    summary = result.summary()
+    summary["parameters_file"] = str(out)
+    summary["figures"] = [str(f) for f in figures]
+    summary["checks"] = checks + running_plausibility(result, scale)
+    summary["data"] = data
+    say_checks("fit", summary["checks"])
+    if args.json:
+        from hdsim.cli import emit_json
+
+        emit_json(summary)
+        return 0
+    m = summary["metrics"]
+    print(f"{meas.source}: running_torque test, {len(meas)} rows, torque on the {meas.torque_side}, effects "
+          f"{', '.join(result.families) or '(base: one Coulomb level)'}")
+    print(f"  rms error {summary['rmse_Nm']:.3g} N·m (noise floor {summary['noise_floor_Nm']:.3g} N·m)")
+    levels = {k: "not run" if v is None else f"{v:.4g} N·m" for k, v in m.items()}
+    print(f"  running torque forward {levels['running_torque_forward_Nm']}, reverse "
+          f"{levels['running_torque_reverse_Nm']}")
+    for name, value in summary["law"].items():
+        print(f"  {name:<24} {value}")
+    print(f"  fitted law: {out}; figures: {', '.join(summary['figures'])}")
     sys.stdout.flush()
     return 0

@@ -95,6 +95,7 @@ SEPARATING = {
 FAMILIES_BY_TEST = {
     "stiffness": ("hardening", "backlash", "friction", "damping"),
     "kinematic_error": ("kinematic_error", "hardening", "backlash", "friction", "damping"),
+    "running_torque": ("friction", "damping", "ripple"),
 }
 
 
@@ -329,7 +330,7 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
     Parameters
     ----------
     meas : Measurement
-        A stiffness or kinematic-error test.
+        A stiffness, kinematic-error or running-torque test.
     effects : str, list or dict, optional
         The baseline's families or effect ids (see `hdsim.identification.fit.parse_effects`).
     unit : str or HarmonicDrive, optional
@@ -348,10 +349,15 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
 
     Returns
     -------
-    Diagnosis
+    Diagnosis or hdsim.identification.running_diagnosis.RunningDiagnosis
         Every step with its fit and the candidates tried, what was added, the
-        ambiguities, the whiteness of the final residual and the findings.
+        ambiguities, the whiteness of the final residual and the findings (the latter
+        for a running-torque test, which has its own law and families).
     """
+    if meas.test == "running_torque":
+        from hdsim.identification.running_diagnosis import diagnose_running
+
+        return diagnose_running(meas, effects, families=families, max_rounds=max_rounds, log=log)
     t0 = time.perf_counter()
     chosen = effects if isinstance(effects, dict) else parse_effects(effects)
     stand_in = {f: fx.default_effect(f) for f in SLOTS}

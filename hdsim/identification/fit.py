@@ -353,8 +353,14 @@ def fit(meas: Measurement, effects=None, *, unit=None, rows=None, start: dict | 
 
     Returns
     -------
-    FitResult
+    FitResult or hdsim.identification.running_fit.RunningFit
+        The latter for a running-torque test (its own law and families).
     """
+    if meas.test == "running_torque":
+        from hdsim.identification.running_fit import fit_running
+        from hdsim.model.running_terms import parse_running_effects
+
+        return fit_running(meas, parse_running_effects(effects), rows=rows)
     chosen = effects if isinstance(effects, dict) else parse_effects(effects)
     model = build_model(unit, chosen, meas)
     ev = Evaluator(meas, max_steps=max_steps)

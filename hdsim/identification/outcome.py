@@ -27,7 +27,7 @@ MIN_EFFECTIVE_SAMPLES = 30
 RATE_FAMILIES = ("damping",)
 
 
-def assess(diagnosis_json: dict, data: dict) -> tuple[str, str]:
+def assess(diagnosis_json: dict, data: dict, limits=None) -> tuple[str, str]:
     """(outcome, next_measurement) of a diagnosis.
 
     Parameters
@@ -37,6 +37,10 @@ def assess(diagnosis_json: dict, data: dict) -> tuple[str, str]:
     data : dict
         The data summary of `hdsim.io.data_checks.examine` (``reversals``,
         ``loading_rates``, ``rows``).
+    limits : callable, optional
+        ``limits(diagnosis_json, data, ranking)`` -> what kept the record from deciding, as
+        measurements (default: the twist tests'; a running-torque test brings its own,
+        `hdsim.identification.running_diagnosis.running_limits`).
 
     Returns
     -------
@@ -47,13 +51,17 @@ def assess(diagnosis_json: dict, data: dict) -> tuple[str, str]:
     explained = bool(diagnosis_json["success"])
     added = diagnosis_json["added"]
     ranking = [c for c in diagnosis_json["ranking"] if c.get("score") is not None]
-    reasons = _limits(diagnosis_json, data, ranking)
+    reasons = (limits or _limits)(diagnosis_json, data, ranking)
     if added:
         return ("found", "") if explained else ("improved", reasons[0] if reasons else "")
     if explained:
         return "nothing_missing", ""
     if reasons:
         return "cannot_decide", reasons[0]
+    if diagnosis_json.get("test") == "running_torque":
+        return "cannot_decide", ("the residual keeps a structure that no running-torque family explains: look at "
+                                 "the residual against time and wave-generator angle in the report (a motor's "
+                                 "cogging, a temperature drift, a load that changes)")
     return "cannot_decide", ("the residual keeps a structure that no family of the library explains on this "
                              "record: look at the residual against time and torque in the report, and record "
                              "the test at a second amplitude and loading rate")

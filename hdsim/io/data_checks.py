@@ -43,7 +43,7 @@ RATE_STEP = 1.5
 #: samples of the local cubic fit that the noise estimate subtracts
 NOISE_WINDOW = 7
 #: identity checks: a fail means the record is not the test it claims
-IDENTITY = ("twist_span", "angle_follows_torque", "kinematic_error_not_zero", "ratio_consistent")
+IDENTITY = ("twist_span", "angle_follows_torque", "kinematic_error_not_zero", "ratio_consistent", "turns_steadily")
 
 
 @dataclass(frozen=True)
@@ -70,21 +70,31 @@ class DriveScale:
         T_N [N·m].
     K_soft, K_stiff : float
         Softest and stiffest catalog stiffness (K1, K3) [N·m/rad].
+    running_torque : float
+        Catalog no-load running torque on the input at 2000 rpm [N·m] (0: unknown).
+    ratio : float
+        Transmission ratio [-].
     """
 
     name: str
     rated_torque: float
     K_soft: float
     K_stiff: float
+    running_torque: float = 0.0
+    ratio: float = 1.0
 
     @classmethod
     def of(cls, model) -> "DriveScale":
         """The scale of a `hdsim.model.drive.HarmonicDrive` (its catalog numbers, else its
         base stiffness)."""
+        from hdsim.model.input_friction import catalog_values
+
         catalog = model.provenance.get("catalog") or {}
         K = float(np.max(model.base_stiffness))
         return cls(str(model.name), float(np.max(model.drive.rated_torque)),
-                   float(catalog.get("K1", K)), float(catalog.get("K3", K)))
+                   float(catalog.get("K1", K)), float(catalog.get("K3", K)),
+                   float(catalog_values(model)["running_torque_2000rpm"]),
+                   float(np.max(np.abs(model.drive.ratio))))
 
 
 def noise_level(x) -> float:
@@ -355,7 +365,12 @@ def examine(meas, drive: DriveScale) -> tuple[list[Check], dict, str]:
     The data summary holds ``rows``, ``dropped_rows`` and the model-free noise floors
     (``noise_floor_rad``, ``torque_noise_Nm``), the reversals and the distinct loading rates.
     """
-    checks, figures = run_checks(meas, drive)
+    if meas.test == "running_torque":
+        from hdsim.io.running_checks import running_checks
+
+        checks, figures = running_checks(meas, drive)
+    else:
+        checks, figures = run_checks(meas, drive)
     checks = import_checks(meas) + checks
     data = {"rows": len(meas), "dropped_rows": meas.rows.dropped_rows, **figures}
     return checks, data, wrong_test(checks)

@@ -2,7 +2,7 @@
 
 The file format (docs/measurements.md)::
 
-    # test: stiffness            <- stiffness | kinematic_error (required)
+    # test: stiffness            <- stiffness | kinematic_error | running_torque (required)
     # ratio: 100                 <- transmission ratio; required for kinematic_error
     # rated_torque_Nm: 67        <- optional
     time_s,torque_Nm,angle_rad
@@ -13,6 +13,10 @@ The file format (docs/measurements.md)::
 |---|---|
 | ``stiffness`` | ``time_s``, ``torque_Nm``, ``angle_rad`` |
 | ``kinematic_error`` | ``time_s``, ``wg_angle_rad``, ``output_angle_rad``, ``torque_Nm`` |
+| ``running_torque`` | ``time_s``, ``wg_angle_rad`` and/or ``output_angle_rad``, ``torque_Nm``; optional ``temperature_C`` |
+
+A running-torque file (a friction sweep) names the shaft its torque is referred to with
+``# torque_side: input`` (default) or ``output``; with ``# ratio:`` one angle gives the other.
 
 Angle columns may end in ``_deg``, ``_arcmin``, ``_arcsec`` or ``_rev`` instead of
 ``_rad``; they are converted to radians on reading. Logs written by other bench
@@ -46,7 +50,9 @@ from hdsim.atomic import atomic_path
 from hdsim.io.import_options import ImportOptions, RowReport
 from hdsim.io.measurement_checks import (
     RATED_KEYS,
+    OPTIONAL_COLUMNS,
     TESTS,
+    complete_angles,
     Where,
     check_values,
     interpret_meta,
@@ -74,17 +80,18 @@ class Measurement:
     Attributes
     ----------
     test : str
-        ``'stiffness'`` or ``'kinematic_error'``.
+        ``'stiffness'``, ``'kinematic_error'`` or ``'running_torque'``.
     time : numpy.ndarray
         Sample times, strictly increasing [s].
     torque : numpy.ndarray
         Stiffness test: torque applied to the output [N·m]. Kinematic-error test: load
-        torque measured at the output [N·m].
+        torque measured at the output [N·m]. Running-torque test: the torque needed to
+        turn the drive, on the shaft `torque_side` names [N·m].
     angle : numpy.ndarray
-        Stiffness test: output twist; kinematic-error test: output angle [rad]. Any
-        constant zero offset of the encoder is kept as measured.
+        Stiffness test: output twist; kinematic-error and running-torque tests: output
+        angle [rad]. Any constant zero offset of the encoder is kept as measured.
     wg_angle : numpy.ndarray or None
-        Wave-generator angle [rad] (kinematic-error test only).
+        Wave-generator angle [rad] (kinematic-error and running-torque tests).
     ratio : float or None
         Transmission ratio [-]; negative when the output turns the other way.
     rated_torque : float or None
@@ -95,6 +102,8 @@ class Measurement:
         Path the data were read from (or ``'<arrays>'``).
     rows : RowReport
         What the import options did to the rows (dropped, windowed, joined runs).
+    temperature : numpy.ndarray or None
+        Temperature [°C], if a running-torque file logs it.
     """
 
     test: str
@@ -107,6 +116,7 @@ class Measurement:
     meta: dict = field(default_factory=dict)
     source: str = "<arrays>"
     rows: RowReport = RowReport()
+    temperature: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.time.size)
@@ -117,8 +127,13 @@ class Measurement:
 
     @property
     def output_angle(self) -> np.ndarray | None:
-        """Output angle [rad] of a kinematic-error test; None for a stiffness test."""
-        return self.angle if self.test == "kinematic_error" else None
+        """Output angle [rad] of a kinematic-error or running-torque test; None for a stiffness test."""
+        return None if self.test == "stiffness" else self.angle
+
+    @property
+    def torque_side(self) -> str:
+        """``'input'`` or ``'output'``: the shaft a running-torque record's torque is referred to."""
+        return self.meta.get("torque_side", "input").strip()
 
     @property
     def kinematic_error(self) -> np.ndarray | None:
@@ -135,8 +150,9 @@ class Measurement:
             "angle_rad": self.angle,
             "output_angle_rad": self.angle,
             "wg_angle_rad": self.wg_angle,
+            "temperature_C": self.temperature,
         }
-        return {name: by_name[name] for name in TESTS[self.test]}
+        return {name: by_name[name] for name in TESTS[self.test] if by_name[name] is not None}
 
 
 def _build(data: dict[str, np.ndarray], test: str, ratio, rated, meta, source,
@@ -146,13 +162,14 @@ def _build(data: dict[str, np.ndarray], test: str, ratio, rated, meta, source,
         values.flags.writeable = False
         return values
 
-    ke = test == "kinematic_error"
+    driven = test != "stiffness"
     return Measurement(
         test=test,
         time=frozen(data["time_s"]),
         torque=frozen(data["torque_Nm"]),
-        angle=frozen(data["output_angle_rad" if ke else "angle_rad"]),
-        wg_angle=frozen(data["wg_angle_rad"]) if ke else None,
+        angle=frozen(data["output_angle_rad" if driven else "angle_rad"]),
+        wg_angle=frozen(data["wg_angle_rad"]) if driven else None,
+        temperature=frozen(data["temperature_C"]) if "temperature_C" in data else None,
         ratio=ratio,
         rated_torque=rated,
         meta=dict(meta),
@@ -216,29 +233,34 @@ def make_measurement(
     rated_torque: float | None = None,
     meta: dict | None = None,
     source: str = "<arrays>",
+    temperature=None,
 ) -> Measurement:
     """Build a checked `Measurement` from arrays in SI units.
 
     Parameters
     ----------
     test : str
-        ``'stiffness'`` or ``'kinematic_error'``.
+        ``'stiffness'``, ``'kinematic_error'`` or ``'running_torque'``.
     time : array_like
         Sample times, strictly increasing [s].
     torque : array_like
         Torque [N·m].
-    angle : array_like
-        Stiffness test: twist; kinematic-error test: output angle [rad].
+    angle : array_like or None
+        Stiffness test: twist; kinematic-error and running-torque tests: output angle
+        [rad] (a running-torque test may give only ``wg_angle`` and the ratio).
     wg_angle : array_like, optional
         Wave-generator angle [rad]; required for ``'kinematic_error'``.
     ratio : float, optional
-        Transmission ratio [-]; required for ``'kinematic_error'``.
+        Transmission ratio [-]; required for ``'kinematic_error'``, and for a
+        running-torque test with one angle.
     rated_torque : float, optional
         Rated torque [N·m].
     meta : dict, optional
         Extra ``#`` keys (values kept as text).
     source : str
         A label for messages.
+    temperature : array_like, optional
+        Temperature [°C] (running-torque test).
 
     Returns
     -------
@@ -259,9 +281,14 @@ def make_measurement(
     where = Where(source)
     test, ratio, rated = interpret_meta(text_meta, where)
     given = {"time_s": time, "torque_Nm": torque, "angle_rad": angle,
-             "output_angle_rad": angle, "wg_angle_rad": wg_angle}
+             "output_angle_rad": angle, "wg_angle_rad": wg_angle, "temperature_C": temperature}
+    optional = OPTIONAL_COLUMNS.get(test, ())
+    if test == "running_torque" and angle is None and wg_angle is None:
+        raise where.fail("a running_torque measurement needs wg_angle or angle (the output angle)")
     data = {}
     for name in TESTS[test]:
+        if given[name] is None and name in optional:
+            continue
         if given[name] is None:
             raise where.fail(f"missing column '{name}'; a {test} measurement needs "
                              f"{', '.join(TESTS[test])}")
@@ -276,6 +303,7 @@ def make_measurement(
     if len(set(sizes.values())) > 1:
         raise where.fail(f"columns differ in length ({sizes}); expected equal lengths")
     check_values(data, where, {si: f"column '{si}'" for si in data})
+    data = complete_angles(data, test, ratio, where)
     return _build(data, test, ratio, rated, text_meta, source)
 
 

@@ -34,13 +34,29 @@ __all__ = [
     "interpret_meta",
     "resolve_columns",
     "check_values",
+    "complete_angles",
+    "OPTIONAL_COLUMNS",
+    "TORQUE_SIDES",
 ]
 
 #: Columns each test needs, by canonical SI name.
 TESTS: dict[str, tuple[str, ...]] = {
     "stiffness": ("time_s", "torque_Nm", "angle_rad"),
     "kinematic_error": ("time_s", "wg_angle_rad", "output_angle_rad", "torque_Nm"),
+    "running_torque": ("time_s", "wg_angle_rad", "output_angle_rad", "torque_Nm", "temperature_C"),
 }
+
+#: Columns a test may lack: a running-torque test needs one angle (the ratio gives the
+#: other) and may log the temperature.
+OPTIONAL_COLUMNS: dict[str, tuple[str, ...]] = {
+    "running_torque": ("wg_angle_rad", "output_angle_rad", "temperature_C"),
+}
+
+#: Of these, a test needs at least one.
+ONE_OF: dict[str, tuple[str, ...]] = {"running_torque": ("wg_angle_rad", "output_angle_rad")}
+
+#: Values of ``# torque_side:`` (running-torque test): the shaft the torque is referred to.
+TORQUE_SIDES = ("input", "output")
 
 #: Fewest data rows a file may hold; below this nothing can be fitted.
 MIN_ROWS = 10
@@ -81,7 +97,7 @@ def canonical_names(test: str | None = None) -> list[str]:
     Parameters
     ----------
     test : str, optional
-        ``'stiffness'`` or ``'kinematic_error'``; None for the names of both tests.
+        A test name (`TESTS`); None for the names of every test.
 
     Returns
     -------
@@ -258,8 +274,8 @@ def interpret_meta(
     origin = origin or {}
     tests = " or ".join(TESTS)
     if "test" not in meta:
-        raise where.fail("no '# test:' key; expected '# test: stiffness' or "
-                         "'# test: kinematic_error' (HDF5: a 'test' attribute; a log without keys: --test)")
+        raise where.fail("no '# test:' key; expected '# test: stiffness', '# test: kinematic_error' or "
+                         "'# test: running_torque' (HDF5: a 'test' attribute; a log without keys: --test)")
     test = meta["test"].strip()
     if test not in TESTS:
         close = difflib.get_close_matches(test, list(TESTS), n=1, cutoff=0.5)
@@ -273,6 +289,10 @@ def interpret_meta(
     elif test == "kinematic_error":
         raise where.fail("no '# ratio:' key; a kinematic_error file needs the transmission "
                          "ratio, e.g. '# ratio: 100' (or --ratio 100)")
+    side = meta.get("torque_side", "input").strip()
+    if test == "running_torque" and side not in TORQUE_SIDES:
+        raise where.fail(f"{origin.get('torque_side', '')}'# torque_side:' is {quote_cell(side)}; expected "
+                         "input or output (the shaft the running torque is referred to)")
     rated = None
     for key in RATED_KEYS:
         if key in meta:
@@ -334,6 +354,7 @@ def resolve_columns(
             canonical_of[file_name] = key
     allowed = canonical_names(test)
     needed = TESTS[test]
+    optional = tuple(optional) + OPTIONAL_COLUMNS.get(test, ())
     found: dict[str, tuple[int, str]] = {}  # canonical SI name -> (index, canonical spelling)
     for i, name in enumerate(header):
         spelled = canonical_of.get(name, name)
@@ -360,8 +381,53 @@ def resolve_columns(
                 alt = " (a log without a clock: give its sample rate with --sample-rate HZ)"
             raise where.fail(f"missing {what} '{si}'{alt}; a {test} file needs "
                              f"{', '.join(needed)}")
+    either = ONE_OF.get(test, ())
+    if either and not any(si in found for si in either):
+        raise where.fail(f"missing {what} {' or '.join(repr(si) for si in either)} (or _deg/_arcmin/_arcsec/_rev); "
+                         f"a {test} file needs at least one of them")
     return {si: (i, (ANGLE_UNITS[split_unit(sp)[1]] if split_unit(sp) else 1.0) * scale_of.get(sp, 1.0))
             for si, (i, sp) in found.items()}
+
+
+def complete_angles(data: dict[str, np.ndarray], test: str, ratio: float | None, where: Where) -> dict:
+    """A running-torque record with both angles: the one the file lacks from the other and the ratio.
+
+    Parameters
+    ----------
+    data : dict of str to numpy.ndarray
+        Canonical SI columns as read.
+    test : str
+        The test; other tests are returned unchanged.
+    ratio : float or None
+        Transmission ratio N [-] (``output = wg / N``).
+    where : Where
+        Names the file in messages.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``data`` with ``wg_angle_rad`` and ``output_angle_rad`` both present.
+
+    Raises
+    ------
+    InputError
+        When one angle is missing and the ratio is not given.
+    """
+    if test not in ONE_OF:
+        return data
+    wg, out = data.get("wg_angle_rad"), data.get("output_angle_rad")
+    if wg is not None and out is not None:
+        return data
+    if ratio is None:
+        have = "wg_angle_rad" if wg is not None else "output_angle_rad"
+        raise where.fail(f"only {have} is given and no '# ratio:' key; a {test} file with one angle needs "
+                         "the transmission ratio to give the other (e.g. --ratio 100)")
+    data = dict(data)
+    if wg is None:
+        data["wg_angle_rad"] = out * ratio
+    else:
+        data["output_angle_rad"] = wg / ratio
+    return data
 
 
 def _unknown_column_text(name: str, spelled: str, test: str, what: str, mapped: bool) -> str:

@@ -23,6 +23,7 @@ from hdsim.io.measurement_checks import (
     TESTS,
     Where,
     check_values,
+    complete_angles,
     interpret_meta,
     quote_cell,
     resolve_columns,
@@ -208,6 +209,7 @@ def read_csv(path: str, raw: bytes, columns: dict[str, str] | None,
     data, report, kept = apply_rows(data, options, where)
     where = Where(path, lines=[numbers[k] for k in kept])
     check_values(data, where, _shown(header, index))
+    data = complete_angles(data, test, ratio, where)
     return Parsed(data, test, ratio, rated, {**meta, **options.overrides()}, report)
 
 
@@ -329,4 +331,5 @@ def read_hdf5(path: str, columns: dict[str, str] | None, options: ImportOptions 
     data, report, _ = apply_rows(data, options, where)
     check_values(data, where, {"time_s": "time_s (from the row index)",
                                **{si: f"dataset '{header[i]}'" for si, (i, _) in index.items()}})
+    data = complete_angles(data, test, ratio, where)
     return Parsed(data, test, ratio, rated, {**meta, **options.overrides()}, report)

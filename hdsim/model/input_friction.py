@@ -1,34 +1,49 @@
-"""Friction on the wave-generator shaft while the drive runs (driven set-up only).
+"""Running torque of the drive: friction on the wave-generator shaft (the one law).
 
 The friction families of `hdsim.model.effects` act across the elastic path (the
-flexspline and its mesh); this module is the *running* friction of the input: WG
-bearing, lip seals, churning of the grease and the sliding of the flexspline over the
-wave-generator bearing. It acts on the WG shaft, not in the elastic path, so it
-changes the motor torque a drive needs and, under speed control, the WG motion; it
-does not twist the flexspline.
+flexspline and its mesh); this module is the *running* friction of the drive as the
+motor feels it: WG bearing, lip seals, churning of the grease, the sliding of the
+flexspline over the wave-generator bearing and the mesh losses that grow with the
+transmitted torque. It acts on the WG shaft, not in the elastic path, so it changes
+the motor torque a drive needs and, under speed control, the WG motion; it does not
+twist the flexspline. The driven bench (`hdsim.simulation.driven`) and the fit of a
+running-torque test (`hdsim.identification.running_fit`) both evaluate
+`InputFriction.torque`; there is no second copy of the law.
 
 Law (Armstrong-Hélouvry, 1991; position-periodic term after Ghorbel, Gandhi &
 Alpeter, ASME JMD 123, 2001, and Tuttle & Seering, 1996)::
 
-    T_f(ω, θ) = m(θ) [F_c + (F_s − F_c) exp(−(ω/ω_s)²)] tanh(ω/ω_ε) + b ω
-    m(θ)      = 1 + Σ_k r_k cos(k θ + φ_k)        (θ the WG angle, k orders of WG rotation)
+    T_f(ω, θ, T_m) = s(ω) [F_c m(θ) + (F_s − F_c) exp(−(ω/ω_s)²) + Δ s(ω) + μ |T_m|] + b ω
+    m(θ)           = 1 + Σ_k r_k cos(k θ + φ_k)      (θ the WG angle, k orders of WG rotation)
+    s(ω)           = tanh(ω/ω_ε)
 
-The periodic part *modulates the magnitude* of the Coulomb/Stribeck level instead of
-adding ``Σ a_k sin(kθ + φ_k)`` as Ghorbel et al. write it: an additive term of fixed
-sign is a conservative cogging torque (it returns in one half-turn what it takes in
-the other) and would make the friction deliver power; the modulated form is
-dissipative for ``Σ|r_k| < 1`` (docs/tutorial-kinematic-error.md, section 6).
-The law is memoryless (the Stribeck curve is a function of speed), so it adds no ODE
-state; ``ω_ε`` is the only regularisation.
+- ``F_c`` Coulomb level, ``Δ`` its direction asymmetry (forward ``F_c + Δ``, reverse
+  ``F_c − Δ``), ``F_s`` the breakaway level and ``ω_s`` the Stribeck speed;
+- ``b`` viscous (churning) loss;
+- ``r_k`` the position ripple of the Coulomb level at orders ``k`` of the WG angle (1×
+  run-out, 2× the two lobes, 4×; the output's 1× is the order ``1/N``);
+- ``μ`` the load-dependent (mesh) friction: ``T_m`` is the torque the mesh transmits,
+  referred to the WG shaft, so ``μ`` is the share of the transmitted torque lost to
+  friction and sets the efficiency under load, ``η ≈ 1/(1 + μ + T_nl/T_m)``.
+
+The ripple *modulates the Coulomb level* instead of adding ``Σ a_k sin(kθ + φ_k)`` as
+Ghorbel et al. write it: an additive term of fixed sign is a conservative cogging torque
+(it returns in one half-turn what it takes in the other) and would make the friction
+deliver power; the modulated form is dissipative while the level stays positive,
+``F_c (1 − Σ|r_k|) ≥ |Δ|`` (`InputFriction.dissipative`; docs/physics.md, running
+torque). Every term is linear in its amplitude (``F_c``, ``F_s − F_c``, ``Δ``, ``b``,
+``F_c r_k cos φ_k``, ``F_c r_k sin φ_k``, ``μ``), which the fit uses. The law is
+memoryless (the Stribeck curve is a function of speed), so it adds no ODE state;
+``ω_ε`` is the only regularisation.
 
 **Where the parameters live.** `hdsim.model.drive.HarmonicDrive` has no slot for
 input friction, so it is *not* a model parameter: `for_unit` builds an
 `InputFriction` from the catalog numbers in ``hdsim/data/input_friction.toml``
-(starting torque and no-load running torque at 2000 rpm, from the Schaeffler
-RT1-H-CS catalog, i = 100, +20 °C), and a driven scenario may override any field in
-its ``[input_friction]`` table (``model = "none"`` switches it off). Efficiency under
-load (the mesh losses that grow with torque) is not modelled: the no-load running
-torque is the only loss on the input.
+(starting torque and no-load running torque at 2000 rpm from the Schaeffler RT1-H-CS
+catalog, i = 100, +20 °C, and one mesh-loss coefficient ``μ`` for all sizes, set by the
+catalog efficiency at rated torque), and a driven scenario may override any field in its
+``[input_friction]`` table (``model = "none"`` switches it off). Temperature is not
+modelled: the catalog figures are those at +20 °C.
 """
 
 from __future__ import annotations
@@ -41,7 +56,6 @@ from importlib import resources
 import numpy as np
 
 from hdsim.errors import InputError, unknown_name
-from hdsim.physics.friction import stribeck
 from hdsim.units import rpm_to_rad_per_s
 
 #: reference speed of the catalog's no-load running torque [rad/s]
@@ -50,20 +64,22 @@ CATALOG_SPEED = rpm_to_rad_per_s(2000.0)
 
 @dataclass(frozen=True)
 class InputFriction:
-    """Friction torque on the WG shaft [N·m] as a function of WG speed and angle."""
+    """Friction torque on the WG shaft [N·m] as a function of WG speed, angle and mesh torque."""
 
     starting_torque: float  # F_s [N·m], breakaway
     coulomb_torque: float   # F_c [N·m], level after the Stribeck dip
     viscous: float          # b [N·m·s/rad]
     stribeck_speed: float   # ω_s [rad/s]
     velocity_scale: float = 0.01  # ω_ε [rad/s]
-    ripple_orders: tuple = ()
-    ripple_amplitudes: tuple = ()
-    ripple_phases: tuple = ()
+    ripple_orders: tuple = ()      # k [-], orders of the WG angle
+    ripple_amplitudes: tuple = ()  # r_k [-], relative to F_c
+    ripple_phases: tuple = ()      # φ_k [rad]
+    coulomb_asymmetry: float = 0.0  # Δ [N·m]: forward level F_c + Δ, reverse F_c − Δ
+    load_coefficient: float = 0.0   # μ [-]: friction per unit of mesh torque on the WG shaft
 
     def __post_init__(self):
         # NaN fails every comparison, so "not >= 0" refuses it; inf is refused by name
-        for name in ("starting_torque", "coulomb_torque", "viscous"):
+        for name in ("starting_torque", "coulomb_torque", "viscous", "load_coefficient"):
             value = np.asarray(getattr(self, name), dtype=float)
             if not np.all((value >= 0.0) & (value < np.inf)):
                 raise InputError(f"input_friction.{name} must be a finite number >= 0")
@@ -71,6 +87,8 @@ class InputFriction:
             value = np.asarray(getattr(self, name), dtype=float)
             if not np.all((value > 0.0) & (value < np.inf)):
                 raise InputError(f"input_friction.{name} must be a finite number > 0")
+        if not np.all(np.isfinite(np.asarray(self.coulomb_asymmetry, dtype=float))):
+            raise InputError("input_friction.coulomb_asymmetry must be a finite number")
         if not len(self.ripple_orders) == len(self.ripple_amplitudes) == len(self.ripple_phases):
             raise InputError("input_friction ripple_orders, ripple_amplitudes and ripple_phases "
                              "must have the same length")
@@ -78,12 +96,16 @@ class InputFriction:
         if not np.all(np.isfinite(np.asarray(ripple, dtype=float))):
             raise InputError("input_friction ripple_orders, ripple_amplitudes and ripple_phases "
                              "must be finite numbers")
-        if sum(abs(float(r)) for r in self.ripple_amplitudes) >= 1.0:
-            raise InputError("input_friction: the ripple amplitudes must sum to less than 1 "
-                             "(the friction level must stay positive)")
+
+    @property
+    def dissipative(self) -> bool:
+        """True when the level stays positive, ``F_c (1 − Σ|r_k|) ≥ |Δ|``, so the friction never
+        delivers power (a fitted law may break it; a scenario's may not)."""
+        floor = np.asarray(self.coulomb_torque) * (1.0 - sum(abs(float(r)) for r in self.ripple_amplitudes))
+        return bool(np.all(floor >= np.abs(np.asarray(self.coulomb_asymmetry)) - 1e-15))
 
     def modulation(self, angle):
-        """Position factor ``m(θ) = 1 + Σ r_k cos(kθ + φ_k)`` of the Coulomb/Stribeck level.
+        """Position factor ``m(θ) = 1 + Σ r_k cos(kθ + φ_k)`` of the Coulomb level.
 
         Parameters
         ----------
@@ -100,7 +122,7 @@ class InputFriction:
             m = m + r * np.cos(k * angle + p)
         return m
 
-    def torque(self, speed, angle):
+    def torque(self, speed, angle, mesh_torque=0.0):
         """Friction torque opposing the WG speed.
 
         Parameters
@@ -109,31 +131,37 @@ class InputFriction:
             WG speed ω [rad/s].
         angle : float or array
             WG angle θ [rad].
+        mesh_torque : float or array
+            Torque the mesh transmits, referred to the WG shaft [N·m] (0: unloaded).
 
         Returns
         -------
         float or array
             Friction torque [N·m].
         """
-        level = stribeck(speed, self.coulomb_torque, self.starting_torque, self.stribeck_speed, 0.0,
-                         self.velocity_scale)
-        return self.modulation(angle) * level + self.viscous * speed
+        sign = np.tanh(speed / self.velocity_scale)
+        excess = (self.starting_torque - self.coulomb_torque) * np.exp(-(speed / self.stribeck_speed) ** 2)
+        level = (self.coulomb_torque * self.modulation(angle) + excess + self.coulomb_asymmetry * sign
+                 + self.load_coefficient * abs(mesh_torque))
+        return level * sign + self.viscous * speed
 
-    def running_torque(self, speed):
+    def running_torque(self, speed, mesh_torque=0.0):
         """Mean friction over a WG revolution at constant speed (the ripple averages out).
 
         Parameters
         ----------
         speed : float or array
             WG speed [rad/s].
+        mesh_torque : float or array
+            Torque the mesh transmits, referred to the WG shaft [N·m].
 
         Returns
         -------
         float or array
-            Running torque [N·m].
+            Running torque [N·m], signed like the speed.
         """
-        return stribeck(speed, self.coulomb_torque, self.starting_torque, self.stribeck_speed,
-                        self.viscous, self.velocity_scale)
+        return self.with_updates(ripple_orders=(), ripple_amplitudes=(), ripple_phases=()).torque(
+            speed, 0.0, mesh_torque)
 
     def with_updates(self, **changes) -> "InputFriction":
         """A copy with fields changed (names checked).
@@ -187,14 +215,15 @@ def from_catalog(starting_torque: float, running_torque: float, running_speed: f
     **shape
         Overrides of the assumed shape (``[shape]`` in hdsim/data/input_friction.toml):
         ``coulomb_share`` [-], ``stribeck_speed`` [rad/s], ``velocity_scale`` [rad/s],
-        ``ripple_orders`` [-], ``ripple_amplitudes`` [-], ``ripple_phases`` [rad].
+        ``ripple_orders`` [-], ``ripple_amplitudes`` [-], ``ripple_phases`` [rad], and of
+        the mesh loss ``load_coefficient`` [-] (``[mesh]``).
 
     Returns
     -------
     InputFriction
         The friction law.
     """
-    defaults = dict(_data()["shape"])
+    defaults = {**_data()["shape"], **_data()["mesh"]}
     defaults.update(shape)
     F_s = float(starting_torque)
     F_c = defaults["coulomb_share"] * F_s
@@ -202,7 +231,8 @@ def from_catalog(starting_torque: float, running_torque: float, running_speed: f
     return InputFriction(
         starting_torque=F_s, coulomb_torque=F_c, viscous=b, stribeck_speed=defaults["stribeck_speed"],
         velocity_scale=defaults["velocity_scale"], ripple_orders=tuple(defaults["ripple_orders"]),
-        ripple_amplitudes=tuple(defaults["ripple_amplitudes"]), ripple_phases=tuple(defaults["ripple_phases"]))
+        ripple_amplitudes=tuple(defaults["ripple_amplitudes"]), ripple_phases=tuple(defaults["ripple_phases"]),
+        load_coefficient=defaults["load_coefficient"])
 
 
 def catalog_values(model) -> dict:
@@ -246,7 +276,8 @@ def for_unit(model, overrides: dict | None = None) -> InputFriction:
         ``model`` (``"catalog"`` or ``"none"``), ``starting_torque_Nm`` [N·m],
         ``running_torque_Nm`` [N·m] (at 2000 rpm), ``coulomb_share`` [-],
         ``stribeck_speed_rpm`` [rpm], ``viscous_Nms`` [N·m·s/rad], ``ripple_orders`` [-],
-        ``ripple_amplitudes`` [-], ``ripple_phases`` [rad].
+        ``ripple_amplitudes`` [-], ``ripple_phases`` [rad], ``coulomb_asymmetry_Nm`` [N·m],
+        ``load_coefficient`` [-].
 
     Returns
     -------
@@ -256,7 +287,8 @@ def for_unit(model, overrides: dict | None = None) -> InputFriction:
     Raises
     ------
     InputError
-        On an unknown key or model, or a value out of range.
+        On an unknown key or model, a value out of range, or a law that would deliver
+        power (ripple and asymmetry larger than the Coulomb level).
     """
     overrides = dict(overrides or {})
     kind = overrides.pop("model", "catalog")
@@ -273,6 +305,8 @@ def for_unit(model, overrides: dict | None = None) -> InputFriction:
         shape["coulomb_share"] = share
     if "stribeck_speed_rpm" in overrides:
         shape["stribeck_speed"] = rpm_to_rad_per_s(overrides.pop("stribeck_speed_rpm"))
+    if "load_coefficient" in overrides:
+        shape["load_coefficient"] = float(overrides.pop("load_coefficient"))
     for key in ("ripple_orders", "ripple_amplitudes", "ripple_phases"):
         if key in overrides:
             value = overrides.pop(key)
@@ -283,9 +317,14 @@ def for_unit(model, overrides: dict | None = None) -> InputFriction:
                             overrides.pop("running_torque_Nm", values["running_torque_2000rpm"]), **shape)
     if "viscous_Nms" in overrides:
         friction = friction.with_updates(viscous=float(overrides.pop("viscous_Nms")))
+    if "coulomb_asymmetry_Nm" in overrides:
+        friction = friction.with_updates(coulomb_asymmetry=float(overrides.pop("coulomb_asymmetry_Nm")))
     if overrides:
         raise unknown_name("input_friction key", next(iter(overrides)),
                            ["model", "starting_torque_Nm", "running_torque_Nm", "coulomb_share",
                             "stribeck_speed_rpm", "viscous_Nms", "ripple_orders", "ripple_amplitudes",
-                            "ripple_phases"])
+                            "ripple_phases", "coulomb_asymmetry_Nm", "load_coefficient"])
+    if not friction.dissipative:
+        raise InputError("input_friction: the ripple amplitudes and the asymmetry must leave the Coulomb "
+                         "level positive, F_c (1 - sum |r_k|) >= |asymmetry| (else the friction delivers power)")
     return friction

@@ -28,13 +28,13 @@ from hdsim.simulation.controller import PIController
 from hdsim.simulation.driven import SETUP, Bench, scalar_ratio
 from hdsim.simulation.loads import NO_LOAD, csv_load, opposing_load, ramped_load, step_load, sweep_load
 from hdsim.simulation.motion import (constant_speed_motion, csv_motion, hold_motion, reversal_motion, sine_motion,
-                                     trapezoid_motion)
+                                     sweep_motion, trapezoid_motion)
 from hdsim.simulation.solver import SolverOptions, integrate_segments, step_schedule
 from hdsim.units import rpm_to_rad_per_s
 
 TWO_PI = 2.0 * np.pi
 
-_PROFILES = ("hold", "constant", "reversal", "trapezoid", "sine", "csv")
+_PROFILES = ("hold", "constant", "reversal", "trapezoid", "sine", "sweep", "csv")
 _LOADS = ("none", "constant", "opposing", "step", "sweep", "csv")
 
 
@@ -49,6 +49,17 @@ def _yes(value, key, where) -> bool:
     if value not in ("yes", "no"):
         raise InputError(f"{where}: {key} must be \"yes\" or \"no\", got {value!r}")
     return value == "yes"
+
+
+def _sweep_speeds(inp: dict, src) -> list[float]:
+    """``input.speeds_rpm`` of a sweep, in rad/s: a non-empty list of finite non-zero numbers."""
+    speeds = inp.get("speeds_rpm")
+    if not speeds or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in speeds):
+        raise InputError(f"{src}: input.speeds_rpm must be a non-empty list of WG speeds in rpm for a sweep")
+    values = [float(v) for v in speeds]
+    if not all(np.isfinite(v) and v != 0.0 for v in values):
+        raise InputError(f"{src}: input.speeds_rpm must be finite and non-zero")
+    return [rpm_to_rad_per_s(abs(v)) for v in values]
 
 
 def bench_from_scenario(model: HarmonicDrive, scenario) -> Bench:
@@ -122,6 +133,10 @@ def bench_from_scenario(model: HarmonicDrive, scenario) -> Bench:
         motion = sine_motion(np.deg2rad(_positive(inp, "amplitude_deg", 1.0, src)) * N,
                              _positive(inp, "frequency_Hz", 1.0, src), _positive(inp, "cycles", 3.0, src),
                              _positive(inp, "dwell_s", 0.0, src, allow_zero=True))
+    elif profile == "sweep":
+        motion = sweep_motion(_sweep_speeds(inp, src), ramp, _positive(inp, "revolutions", 4.0, src),
+                              _positive(inp, "settle_revolutions", 1.0, src, allow_zero=True),
+                              _positive(inp, "dwell_s", 0.05, src, allow_zero=True))
     elif profile == "csv":
         motion = csv_motion(csv_data)
     else:

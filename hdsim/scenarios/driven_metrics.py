@@ -17,13 +17,15 @@ from hdsim.scenarios import ke_metrics
 from hdsim.simulation.driven import Bench, sample_model, scalar_ratio
 from hdsim.simulation.linearize import drive_tangent_stiffness, linear_model, linear_summary, natural_frequencies
 from hdsim.simulation.solver import SimulationResult
+from hdsim.simulation.efficiency import efficiency
 from hdsim.simulation.starting_torque import starting_torque
-from hdsim.units import arcsec_to_rad, rad_per_s_to_rpm, rad_to_arcsec
+from hdsim.units import arcsec_to_rad, rad_per_s_to_rpm, rad_to_arcsec, rpm_to_rad_per_s
 
 TWO_PI = 2.0 * np.pi
 #: the metric groups a driven scenario may list
 DRIVEN_METRICS = ("transmission_accuracy", "lost_motion_on_reversal", "windup", "order_spectrum",
-                  "running_torque", "starting_torque", "linearisation", "frequency_response", "tracking",
+                  "running_torque", "running_torque_sweep", "starting_torque", "backdriving_torque", "efficiency",
+                  "linearisation", "frequency_response", "tracking",
                   "settling", "load_step", "oscillation")
 
 
@@ -104,8 +106,22 @@ def driven_metrics(model: HarmonicDrive, scenario, bench: Bench, result: Simulat
             (window,) = need("constant")
             out["running_torque_mNm"] = 1e3 * ke_metrics.window_mean(t, s["motor_torque_Nm"], window)
             out["running_speed_rpm"] = np.full(M, rad_per_s_to_rpm(bench.motion.max_speed))
+        elif group == "running_torque_sweep":
+            out.update(_sweep_metrics(t, s["motor_torque_Nm"], windows, data))
         elif group == "starting_torque":
             out["starting_torque_mNm"] = 1e3 * starting_torque(model, bench.input_friction)
+        elif group == "backdriving_torque":
+            # the output torque that starts the unloaded input turning: N F_break / (1 − μ), the mesh
+            # term μ|τ|/N of the input friction growing with the torque that backdrives it
+            start = out.get("starting_torque_mNm", 1e3 * starting_torque(model, bench.input_friction)) / 1e3
+            out["backdriving_torque_Nm"] = abs(N) * start / (1.0 - bench.input_friction.load_coefficient)
+        elif group == "efficiency":
+            table = data.get("efficiency", {})
+            speed = rpm_to_rad_per_s(float(table.get("speed_rpm", 2000.0)))
+            out["efficiency_percent"] = 100.0 * efficiency(model, bench.input_friction, speed,
+                                                           float(table.get("load", 1.0)),
+                                                           float(table.get("revolutions", 4.0)))
+            out["efficiency_speed_rpm"] = np.full(M, rad_per_s_to_rpm(speed))
         elif group in ("linearisation", "frequency_response"):
             _linear_metrics(model, scenario, bench, result, group, out)
         elif group == "tracking":
@@ -230,3 +246,24 @@ def frequency_response_check(t, load_torque, output_angle, sys, window, band_fra
     phase_err = np.abs(np.angle(H_sim / H_lin))
     return fk, H_sim, H_lin, {"magnitude": mag_err, "phase": phase_err, "f1_Hz": f1,
                               "complex": np.abs(H_sim / H_lin - 1.0)}
+
+
+def _sweep_metrics(t, motor_torque, windows, data) -> dict:
+    """Running torque per speed of a sweep: the mean motor torque over whole WG turns of each cruise.
+
+    ``running_torque_{rpm}rpm_mNm`` is the mean of the forward and reverse magnitudes;
+    ``running_torque_forward_Nm`` / ``_reverse_Nm`` the mean magnitude over every cruise of
+    one direction, as a running-torque fit reports them.
+    """
+    speeds = [float(v) for v in data["input"]["speeds_rpm"]]
+    out, by_direction = {}, {"forward": [], "reverse": []}
+    for i, rpm in enumerate(speeds):
+        levels = []
+        for name in ("forward", "reverse"):
+            level = np.abs(ke_metrics.window_mean(t, motor_torque, windows[f"sweep_{i}_{name}"]))
+            levels.append(level)
+            by_direction[name].append(level)
+        out[f"running_torque_{abs(rpm):g}rpm_mNm"] = 1e3 * 0.5 * (levels[0] + levels[1])
+    out["running_torque_forward_Nm"] = np.mean(by_direction["forward"], axis=0)
+    out["running_torque_reverse_Nm"] = np.mean(by_direction["reverse"], axis=0)
+    return out

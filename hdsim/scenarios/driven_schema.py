@@ -8,8 +8,10 @@ schema has no booleans). See docs/tutorial-kinematic-error.md for every key.
 DRIVEN_SCHEMA = {
     "input": {
         "mode": str,                 # prescribed | pi
-        "profile": str,              # hold | constant | reversal | trapezoid | sine | csv
+        "profile": str,              # hold | constant | reversal | trapezoid | sine | sweep | csv
         "speed_rpm": float,          # WG cruise speed (constant, reversal, trapezoid)
+        "speeds_rpm": list,          # sweep: WG speeds, each run forward and back
+        "revolutions": float,        # sweep: measured WG turns per cruise (settle_revolutions before them)
         "ramp_s": float,             # speed ramp time (cosine; linear for trapezoid)
         "output_revolutions": float,  # measured output revolutions at cruise (each way)
         "settle_revolutions": float,  # cruise travel before the measured part
@@ -56,6 +58,13 @@ DRIVEN_SCHEMA = {
         "ripple_orders": list,
         "ripple_amplitudes": list,
         "ripple_phases": list,
+        "coulomb_asymmetry_Nm": float,  # forward level minus the mean level
+        "load_coefficient": float,   # mesh loss per unit of transmitted torque (efficiency under load)
+    },
+    "efficiency": {
+        "speed_rpm": float,          # WG speed of the efficiency run (default 2000, as the catalog)
+        "load": float,               # brake torque, fraction of T_N (default 1: efficiency at rated torque)
+        "revolutions": float,        # measured WG turns
     },
     "linearise": {
         "load": float,               # operating-point load, fraction of T_N

@@ -25,8 +25,9 @@ included (the ``e_w``, ``e_o`` terms are the instantaneous ratio ripple; the pla
     (J_out + J_load) ω̇_o = T_L(t, ω_o) − τ (1 − e_o)
     J_in ω̇_w             = T_m − T_f(ω_w, θ_w) + τ (1/N + e_w)
 
-Efficiency under load (mesh losses growing with torque) is not modelled; the WG
-shaft friction (`hdsim.model.input_friction`) is the only input-side loss. The
+The WG-shaft friction (`hdsim.model.input_friction`) is the input-side loss; its
+load-dependent term acts on the mesh torque ``τ (1/N + e_w)`` and sets the efficiency under
+load. The
 load-dependence of the kinematic error follows the load as a function of time
 ``T_L(t)`` (equal to the drive torque at steady state), which avoids an algebraic loop
 between τ and e; a brake (`hdsim.simulation.loads.opposing_load`) applies its torque
@@ -189,7 +190,7 @@ def driven_wave_generator(model: HarmonicDrive, motion: Motion, load: Load = NO_
         wg_force = tau * (1.0 / N + e_w)
         T_L = T_t if load.at_output_speed is None else load.at_output_speed(w_o)  # a brake: actual speed
         acc_o = (T_L - out_force) / J_out
-        T_f = fr.torque(w_w, th_w) if friction_on else 0.0 * w_w
+        T_f = fr.torque(w_w, th_w, wg_force) if friction_on else 0.0 * w_w
         w_cmd = None
         if prescribed:
             acc_w = a_ref

@@ -217,6 +217,43 @@ def reversal_motion(speed, ratio, ramp_s, revolutions, settle_revolutions, dwell
     return knots.motion(windows, "reversal")
 
 
+def sweep_motion(speeds, ramp_s, revolutions, settle_revolutions, dwell_s) -> Motion:
+    """A friction sweep: each speed forward and back, with a standstill between.
+
+    For every speed: ramp up, cruise ``settle_revolutions + revolutions`` WG turns, ramp
+    down, dwell, the same reversed, dwell.
+
+    Parameters
+    ----------
+    speeds : sequence of float
+        WG speeds [rad/s], non-zero.
+    ramp_s : float
+        Cosine ramp time [s].
+    revolutions, settle_revolutions : float
+        Measured WG turns of each cruise (whole turns average out a ripple), and the turns
+        cruised before them.
+    dwell_s : float
+        Standstill after each ramp down [s].
+
+    Returns
+    -------
+    Motion
+        Windows ``sweep_{i}_forward`` and ``sweep_{i}_reverse``: the last ``revolutions``
+        WG turns of each cruise, ``i`` the index into ``speeds``.
+    """
+    times, values, windows = [0.0], [0.0], {}
+    for i, v in enumerate(speeds):
+        v = abs(float(v))
+        cruise = (settle_revolutions + revolutions) * TWO_PI / v
+        measured = revolutions * TWO_PI / v
+        for name, sign in (("forward", 1.0), ("reverse", -1.0)):
+            t = times[-1]
+            times += [t + ramp_s, t + ramp_s + cruise, t + 2 * ramp_s + cruise, t + 2 * ramp_s + cruise + dwell_s]
+            values += [sign * v, sign * v, 0.0, 0.0]
+            windows[f"sweep_{i}_{name}"] = (t + ramp_s + cruise - measured, t + ramp_s + cruise)
+    return SpeedKnots(times, values).motion(windows, "sweep")
+
+
 def trapezoid_motion(speed, ratio, move, ramp_s, dwell_s, back: bool) -> Motion:
     """Point-to-point: a trapezoidal WG speed profile (triangular if the move is short).
 

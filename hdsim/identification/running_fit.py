@@ -1,0 +1,407 @@
+"""Fit of a running-torque test (a friction sweep) with the drive's one running-torque law.
+
+The record: the drive turned at one or more constant speeds each way, the torque it
+needs logged (often from motor current), on the input or the output shaft
+(``# torque_side``). The model: ``T = InputFriction.torque(ω, θ) + J α`` on the WG shaft
+(`hdsim.model.input_friction`, the law the driven bench uses), with the families of
+`hdsim.model.running_terms` switched on. A record on the output shaft is referred to the
+WG shaft by the ratio for the fit, and every torque the fit reports is given back on
+the file's side.
+
+Speed and acceleration come from the WG angle by Savitzky–Golay differentiation
+(Savitzky & Golay, Anal. Chem. 36, 1964); on a plateau the speed is the slope of the
+angle over the whole plateau (`hdsim.io.running_checks.sweep_kinematics`). The fit uses the rows where the drive turns
+at least half as fast as on its slowest steady plateau: near a reversal the torque
+passes through presliding friction that no running law describes, and the speed from
+an encoder is least certain there.
+
+Every amplitude enters the law linearly, so the fit is a bounded linear least-squares
+problem (`scipy.optimize.lsq_linear`) for each Stribeck speed of a short log-spaced
+grid, the best of which is kept. A fit costs milliseconds, so a diagnosis can refit
+every candidate on every hold-out fold.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+from scipy.optimize import lsq_linear
+
+from hdsim.errors import InputError
+from hdsim.identification.optimizer import effective_n
+from hdsim.io.data_checks import noise_level
+from hdsim.io.measurement import Measurement
+from hdsim.io.running_checks import Segment, sweep_kinematics
+from hdsim.model.input_friction import InputFriction
+from hdsim.model.running_terms import BASE_TERM, RUNNING_FAMILIES, PositionRipple, RunningTerm, unit_law
+
+__all__ = ["SweepRecord", "Segment", "RunningFit", "fit_running", "running_plausibility"]
+
+#: owner of the columns of a family's other shapes (not in the law)
+SHAPE = "shape"
+#: rows slower than this fraction of the slowest plateau are left out of the fit
+MOVING_FRACTION = 0.5
+
+
+@dataclass(frozen=True, eq=False)
+class SweepRecord:
+    """What the fit needs of a running-torque measurement, on the WG shaft.
+
+    Attributes
+    ----------
+    measurement : Measurement
+        The record.
+    speed, accel : numpy.ndarray
+        WG speed [rad/s] and acceleration [rad/s²].
+    torque : numpy.ndarray
+        The torque referred to the WG shaft [N·m].
+    side_factor : float
+        File torque = ``side_factor`` × WG-shaft torque (1 on the input, the ratio on the output).
+    segments : list of Segment
+        The constant-speed plateaus.
+    moving : numpy.ndarray
+        Rows the fit uses (bool).
+    velocity_scale : float
+        ω_ε of the fitted law [rad/s]: 5 % of the slowest plateau.
+    noise_floor : float
+        Model-free rms noise of the torque on the WG shaft [N·m].
+    output_turns : float
+        Span of the output angle [revolutions].
+    """
+
+    measurement: Measurement
+    speed: np.ndarray
+    accel: np.ndarray
+    torque: np.ndarray
+    side_factor: float
+    segments: list
+    moving: np.ndarray
+    velocity_scale: float
+    noise_floor: float
+    output_turns: float
+    #: columns already computed, by (term, non-linear value): a diagnosis refits the same
+    #: terms many times (candidates, hold-out halves, the Stribeck grid)
+    cache: dict = field(default_factory=dict, repr=False)
+
+    def columns(self, term: RunningTerm, nonlinear, other: bool = False):
+        """The term's columns along the record (``other``: its other shapes, or None)."""
+        key = (term, nonlinear, other)
+        if key not in self.cache:
+            meas = self.measurement
+            ratio = float(meas.ratio) if meas.ratio is not None else 1.0
+            make = term.other_shapes if other else term.columns
+            self.cache[key] = make(self.speed, meas.wg_angle, self.velocity_scale, ratio, nonlinear)
+        return self.cache[key]
+
+    @classmethod
+    def of(cls, meas: Measurement) -> "SweepRecord":
+        """The record of a running-torque measurement; InputError if it never turns steadily."""
+        if meas.test != "running_torque":
+            raise InputError(f"{meas.source}: a {meas.test} test is not a running-torque test")
+        ratio = float(meas.ratio) if meas.ratio is not None else 1.0
+        side = ratio if meas.torque_side == "output" else 1.0
+        speed, accel, segments = sweep_kinematics(meas.time, meas.wg_angle)
+        if not segments:
+            raise InputError(f"{meas.source}: the drive never turns at a steady speed; a running-torque test "
+                             "needs plateaus of constant speed (a friction sweep)")
+        slowest = min(abs(s.speed) for s in segments)
+        moving = np.abs(speed) >= MOVING_FRACTION * slowest
+        torque = np.asarray(meas.torque, dtype=float) / side
+        turns = float(np.ptp(meas.angle)) / (2.0 * math.pi)
+        return cls(meas, speed, accel, torque, side, segments, moving, 0.05 * slowest,
+                   noise_level(torque), turns)
+
+    @property
+    def plateau_speeds(self) -> np.ndarray:
+        return np.array([abs(s.speed) for s in self.segments])
+
+    def steady(self, direction: int) -> np.ndarray:
+        """Rows on plateaus of one direction (+1 forward, −1 reverse)."""
+        mask = np.zeros(self.speed.size, dtype=bool)
+        for s in self.segments:
+            if np.sign(s.speed) == direction:
+                mask[s.start:s.stop] = True
+        return mask
+
+    def term(self, family: str) -> RunningTerm:
+        """The family's term for this record (the ripple drops the output's order when the
+        output turned less than once: a periodic term would only fit a drift)."""
+        term = RUNNING_FAMILIES[family]
+        if isinstance(term, PositionRipple) and self.output_turns < 1.0:
+            return replace(term, output_order=False)
+        return term
+
+
+@dataclass
+class RunningFit:
+    """The fitted running-torque law and what the fit says about it.
+
+    Attributes
+    ----------
+    record : SweepRecord
+        The record.
+    families : list of str
+        The families switched on (the base always is).
+    law : InputFriction
+        The fitted law on the WG shaft.
+    inertia : float
+        Fitted inertia of motor and WG [kg·m²].
+    prediction, residual : numpy.ndarray
+        Model and measured-minus-model torque on the file's side [N·m], every row.
+    rows : numpy.ndarray
+        Rows the fit minimised (bool).
+    fitted, uncertainty : dict
+        Amplitudes by ``family.name`` on the WG shaft, and their 1-σ uncertainties.
+    """
+
+    record: SweepRecord
+    families: list
+    law: InputFriction
+    inertia: float
+    prediction: np.ndarray
+    residual: np.ndarray
+    rows: np.ndarray
+    n_params: int
+    fitted: dict = field(default_factory=dict)
+    uncertainty: dict = field(default_factory=dict)
+
+    @property
+    def measurement(self) -> Measurement:
+        return self.record.measurement
+
+    def rmse(self, rows=None) -> float:
+        r = self.residual[self.rows if rows is None else rows]
+        return float(np.sqrt(np.mean(r * r))) if r.size else float("nan")
+
+    @property
+    def rmse_Nm(self) -> float:
+        return self.rmse()
+
+    @property
+    def rss(self) -> float:
+        r = self.residual[self.rows]
+        return float(r @ r)
+
+    @property
+    def n(self) -> int:
+        return int(np.count_nonzero(self.rows))
+
+    @property
+    def n_eff(self) -> float:
+        return effective_n(self.residual[self.rows])
+
+    def metrics(self) -> dict:
+        """``running_torque_forward_Nm`` / ``_reverse_Nm``: the model's mean torque magnitude over the
+        plateaus of each direction (inertia excluded), on the file's side; None for a direction the
+        record never runs in."""
+        rec = self.record
+        side = abs(rec.side_factor)
+        out = {}
+        for name, direction in (("running_torque_forward_Nm", 1), ("running_torque_reverse_Nm", -1)):
+            mask = rec.steady(direction)
+            law_torque = self.law.torque(rec.speed[mask], self.measurement.wg_angle[mask])
+            out[name] = float(side * np.mean(np.abs(law_torque))) if mask.any() else None
+        return out
+
+    def law_table(self) -> dict:
+        """The fitted law as a scenario's ``[input_friction]`` table (WG shaft, SI; rpm for ω_s)."""
+        law = self.law
+        share = law.coulomb_torque / law.starting_torque if law.starting_torque > 0 else 1.0
+        return {"starting_torque_Nm": float(law.starting_torque), "coulomb_share": float(share),
+                "stribeck_speed_rpm": float(law.stribeck_speed * 30.0 / math.pi),
+                "viscous_Nms": float(law.viscous), "coulomb_asymmetry_Nm": float(law.coulomb_asymmetry),
+                "ripple_orders": [float(k) for k in law.ripple_orders],
+                "ripple_amplitudes": [float(r) for r in law.ripple_amplitudes],
+                "ripple_phases": [float(p) for p in law.ripple_phases]}
+
+    def summary(self) -> dict:
+        """JSON-ready summary (the ``hdsim fit --json`` object of a running-torque test)."""
+        side = abs(self.record.side_factor)
+        r = self.residual[self.rows]
+        return {
+            "test": "running_torque",
+            "torque_side": self.measurement.torque_side,
+            "effects": list(self.families),
+            "rows": self.n,
+            "rmse_Nm": self.rmse_Nm,
+            "max_abs_error_Nm": float(np.max(np.abs(r))) if r.size else float("nan"),
+            "noise_floor_Nm": float(side * self.record.noise_floor),
+            "bic": self.bic(),
+            "n_params": self.n_params,
+            "fitted": {k: float(v) for k, v in self.fitted.items()},
+            "uncertainty": {k: float(v) for k, v in self.uncertainty.items() if math.isfinite(v)},
+            "derived": {"inertia_kg_m2": float(self.inertia)},
+            "metrics": self.metrics(),
+            "law": self.law_table(),
+            "plateau_speeds_rpm": [float(s.speed * 30.0 / math.pi) for s in self.record.segments],
+        }
+
+    def bic(self, n_eff: float | None = None) -> float:
+        """``n_eff ln(RSS/n) + k ln n_eff``: the BIC with the residual's effective sample count."""
+        n_eff = self.n_eff if n_eff is None else n_eff
+        return n_eff * math.log(max(self.rss, 1e-300) / max(self.n, 1)) + self.n_params * math.log(n_eff)
+
+    def to_toml(self) -> str:
+        import tomli_w
+
+        doc = {"format": "hdsim-running-fit-1", "test": "running_torque",
+               "source": str(self.measurement.source), "torque_side": self.measurement.torque_side,
+               "effects": list(self.families), "input_friction": self.law_table(),
+               "inertia": {"J_in_kg_m2": float(self.inertia)},
+               "metrics": {k: v for k, v in self.metrics().items() if v is not None},
+               "fit": {"rows": self.n, "rmse_Nm": self.rmse_Nm, "n_params": self.n_params}}
+        head = ("# hdsim running-torque fit. [input_friction] is on the wave-generator shaft and pastes into a\n"
+                "# driven scenario's [input_friction] table (docs/measurements.md, running torque).\n")
+        return head + tomli_w.dumps(doc)
+
+    def save(self, path) -> Path:
+        from hdsim.atomic import write_text_atomic
+
+        path = Path(path)
+        write_text_atomic(path, self.to_toml())
+        return path
+
+
+def _design(rec: SweepRecord, terms: list[RunningTerm], nonlinear: dict, widened: tuple = ()) -> tuple:
+    """Columns of every term (and the other shapes of the ``widened`` families) plus the inertia
+    column: (owners, names, matrix, lower, upper); other shapes are owned by `SHAPE`."""
+    owners, names, cols, lower, upper = [], [], [], [], []
+    for term in terms:
+        parts = [(term, rec.columns(term, nonlinear.get(term.family)))]
+        if term.family in widened:
+            parts.append((SHAPE, rec.columns(term, nonlinear.get(term.family), other=True)))
+        for owner, c in parts:
+            if c is None:
+                continue
+            owners += [owner] * len(c.names)
+            names += list(c.names)
+            cols.append(c.matrix)
+            lower += list(c.lower)
+            upper += list(c.upper)
+    owners.append(BASE_TERM)  # the base model holds the inertia of motor and WG
+    names.append("inertia")
+    cols.append(rec.accel[:, None])
+    lower.append(0.0)
+    upper.append(math.inf)
+    return owners, names, np.hstack(cols), np.array(lower), np.array(upper)
+
+
+def _solve(A, y, lower, upper):
+    scale = np.sqrt(np.sum(A * A, axis=0))
+    scale[scale == 0] = 1.0
+    sol = lsq_linear(A / scale, y, bounds=(lower * scale, upper * scale), method="bvls")
+    return np.clip(sol.x / scale, lower, upper)  # round-off may step a hair past a bound
+
+
+def fit_running(record, families=(), rows=None, widened=()) -> RunningFit:
+    """Fit the running-torque law with the base and ``families`` to a sweep.
+
+    Parameters
+    ----------
+    record : SweepRecord or Measurement
+        A running-torque record.
+    families : iterable of str
+        Running-torque families (`hdsim.model.running_terms.RUNNING_FAMILIES`).
+    rows : array_like of bool, optional
+        Rows to fit (a hold-out fold); default every moving row.
+    widened : iterable of str, optional
+        Families that may also take their other shapes (`RunningTerm.other_shapes`): the
+        diagnosis's test for proxies. The law written back holds the law's forms only;
+        ``prediction`` and ``residual`` include the other shapes.
+
+    Returns
+    -------
+    RunningFit
+        The fit; ``prediction`` and ``residual`` cover every row.
+    """
+    rec = record if isinstance(record, SweepRecord) else SweepRecord.of(record)
+    families = [f for f in RUNNING_FAMILIES if f in set(families)]
+    terms = [BASE_TERM] + [rec.term(f) for f in families]
+    use = rec.moving if rows is None else rec.moving & np.asarray(rows, dtype=bool)
+    if np.count_nonzero(use) < 10:
+        raise InputError(f"{rec.measurement.source}: fewer than 10 rows at a steady running speed to fit")
+    y = rec.torque
+    grids = {t.family: t.grid(rec.plateau_speeds) for t in terms if t.grid(rec.plateau_speeds)}
+    choices = [dict(zip(grids, values)) for values in _product(list(grids.values()))]
+    best = None
+    for nonlinear in choices:
+        owners, names, A, lo, hi = _design(rec, terms, nonlinear, tuple(widened))
+        x = _solve(A[use], y[use], lo, hi)
+        r = y[use] - A[use] @ x
+        rss = float(r @ r)
+        if best is None or rss < best[0]:
+            best = (rss, nonlinear, owners, names, A, x)
+    rss, nonlinear, owners, names, A, x = best
+    law = unit_law(rec.velocity_scale)
+    for term in terms:
+        law = term.write_back(law, {n: float(v) for o, n, v in zip(owners, names, x) if o is term},
+                              nonlinear.get(term.family))
+    inertia = float(x[-1])
+    side = rec.side_factor
+    prediction = side * (law.torque(rec.speed, rec.measurement.wg_angle) + inertia * rec.accel)
+    shapes = [j for j, o in enumerate(owners) if o is SHAPE]
+    if shapes:  # the other shapes of widened families (not in the law)
+        prediction = prediction + side * (A[:, shapes] @ x[shapes])
+    residual = np.asarray(rec.measurement.torque, dtype=float) - prediction
+    n_params = len(names) + len(grids)
+    fitted = {f"{_owner_name(o)}.{n}": float(v) for o, n, v in zip(owners, names, x)}
+    fitted.update({f"{f}.stribeck_speed": float(v) for f, v in nonlinear.items()})
+    sigma = _uncertainty(A[use], y[use] - A[use] @ x, owners, names)
+    return RunningFit(rec, families, law, inertia, prediction, residual, use, n_params, fitted, sigma)
+
+
+def _product(grids: list) -> list:
+    out = [()]
+    for grid in grids:
+        out = [(*head, v) for head in out for v in grid]
+    return out
+
+
+def _uncertainty(A, r, owners, names) -> dict:
+    """1-σ of each amplitude from (AᵀA)⁻¹ s², widened by √(n/n_eff) for a correlated residual."""
+    n, k = A.shape
+    s2 = float(r @ r) / max(n - k, 1)
+    try:
+        cov = np.linalg.pinv(A.T @ A) * s2
+    except np.linalg.LinAlgError:
+        return {}
+    widen = math.sqrt(n / effective_n(r))
+    sd = np.sqrt(np.maximum(np.diag(cov), 0.0)) * widen
+    return {f"{_owner_name(o)}.{name}": float(s) for o, name, s in zip(owners, names, sd)}
+
+
+def _owner_name(owner) -> str:
+    return "shape" if owner is SHAPE else owner.family
+
+
+def running_plausibility(fit: RunningFit, drive) -> list[dict]:
+    """The fitted law compared with the drive's catalog and with physics, as checks.
+
+    ``warn`` for a Coulomb level more than 30× the catalog running torque either way, a
+    law whose ripple and asymmetry exceed its level (it would deliver power: an offset or
+    a load larger than the friction), and each amplitude whose uncertainty exceeds it;
+    one ``ok`` when none is found.
+    """
+    out = []
+    law = fit.law
+    catalog = getattr(drive, "running_torque", 0.0)
+    if catalog and not catalog / 30.0 <= law.coulomb_torque + abs(law.coulomb_asymmetry) <= 30.0 * catalog:
+        out.append({"check": "friction_level", "status": "warn",
+                    "message": f"the fitted level {law.coulomb_torque:.3g} N·m on the input is "
+                               f"{law.coulomb_torque / catalog:.3g}× the catalog running torque of {drive.name}: "
+                               "another drive, the torque on the other shaft, or torque in other units"})
+    if not law.dissipative:
+        out.append({"check": "dissipative", "status": "warn",
+                    "message": f"the fitted asymmetry {law.coulomb_asymmetry:.3g} N·m and ripple exceed the level "
+                               f"{law.coulomb_torque:.3g} N·m: the torque keeps one sign in both directions, an "
+                               "offset or a load (gravity, a spring) larger than the friction"})
+    for name, value in fit.fitted.items():
+        sigma = fit.uncertainty.get(name, 0.0)
+        if abs(sigma) > abs(value) and abs(value) > 0:
+            out.append({"check": "uncertainty", "status": "warn",
+                        "message": f"{name} = {value:.3g} ± {sigma:.2g}: the sweep does not determine it"})
+    return out or [{"check": "plausibility", "status": "ok",
+                    "message": f"the fitted law is within what the catalog of {drive.name} and physics allow"}]

@@ -1,0 +1,245 @@
+"""Checks of a running-torque record (a friction sweep) before any fit, and its plateaus.
+
+A running-torque test turns the drive at constant speeds, both ways, and logs the torque
+it needs. Before a fit the record is checked, without any model, against that claim and
+against the drive's catalog (docs/measurements.md, "Checks before any fit"):
+
+| check | fail / warn when |
+|---|---|
+| ``turns_steadily`` (identity) | no plateau of constant speed: the drive does not run (a locked or breakaway test) |
+| ``torque_opposes_motion`` | the torque does not change sign with the direction on most plateaus: an offset or a load larger than the friction |
+| ``speeds`` | one speed only: a viscous loss cannot be told from a Coulomb level |
+| ``reversals`` | one direction only: an asymmetry cannot be seen |
+| ``torque_side`` | the level is 30× above or below the catalog running torque on the named side |
+| ``temperature`` | the logged temperature spans more than 10 °C (grease friction changes with it) |
+| ``torque_noise`` | the torque noise exceeds half the running level |
+
+Speed comes from the WG angle by Savitzky–Golay differentiation (Savitzky & Golay,
+Anal. Chem. 36, 1964); the plateaus are runs of one sign within 5 % of their mean on a
+speed smoothed over 0.1 s (`sweep_kinematics`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.signal import savgol_filter
+
+from hdsim.io.data_checks import Check, noise_level
+
+__all__ = ["Segment", "speed_and_acceleration", "sweep_kinematics", "constant_speed_segments", "distinct_speeds",
+           "running_checks", "PLATEAU_TOLERANCE"]
+
+#: a plateau: the speed stays within this fraction of its running mean
+PLATEAU_TOLERANCE = 0.05
+#: a plateau turns the wave generator at least this far [rad]
+MIN_TRAVEL = 1.0
+#: two plateau speeds are distinct when they differ by more than this factor
+SPEED_STEP = 1.25
+#: the running level may be this many times the catalog's either way before the side is questioned
+SIDE_FACTOR = 30.0
+#: a temperature span above this changes grease friction noticeably [K]
+TEMPERATURE_SPAN = 10.0
+#: torque noise over the running level above which the record says little
+NOISE_SHARE = 0.5
+RPM_PER_RAD_S = 30.0 / math.pi
+
+
+@dataclass(frozen=True)
+class Segment:
+    """A constant-speed plateau: rows ``start:stop`` at WG speed ``speed`` [rad/s]."""
+
+    start: int
+    stop: int
+    speed: float
+
+
+def speed_and_acceleration(time, angle, window_s: float = 0.01) -> tuple[np.ndarray, np.ndarray]:
+    """Speed [rad/s] and acceleration [rad/s²] from an angle by Savitzky–Golay derivatives.
+
+    The windows span about ``window_s`` (speed) and twice that (acceleration), at least 7
+    and 11 samples: long enough to average encoder steps, short enough to follow a ramp.
+    """
+    t = np.asarray(time, dtype=float)
+    x = np.asarray(angle, dtype=float)
+    dt = float(np.median(np.diff(t)))
+    fs = 1.0 / dt
+    w1 = min(max(2 * int(0.5 * window_s * fs) + 1, 7), _odd_below(x.size))
+    w2 = min(max(2 * int(window_s * fs) + 1, 11), _odd_below(x.size))
+    speed = savgol_filter(x, w1, 3, deriv=1, delta=dt, mode="interp")
+    accel = savgol_filter(x, w2, 3, deriv=2, delta=dt, mode="interp")
+    return speed, accel
+
+
+def sweep_kinematics(time, angle) -> tuple[np.ndarray, np.ndarray, list]:
+    """Speed, acceleration and plateaus of a sweep.
+
+    The plateaus are found on a speed smoothed over 0.1 s (an encoder's steps make a
+    10 ms derivative useless at a few rad/s); on each plateau, trimmed by that window at
+    both ends, the speed is the slope of the angle fitted over the whole plateau and the
+    acceleration is zero. Elsewhere (the ramps) the 10 ms derivatives stand. A plateau
+    must turn the wave generator by `MIN_TRAVEL` at least.
+
+    Returns
+    -------
+    tuple
+        ``(speed [rad/s], acceleration [rad/s²], list of Segment)``.
+    """
+    t = np.asarray(time, dtype=float)
+    x = np.asarray(angle, dtype=float)
+    speed, accel = speed_and_acceleration(t, x)
+    smooth, _ = speed_and_acceleration(t, x, window_s=0.1)
+    trim = max(int(0.05 / float(np.median(np.diff(t)))), 3)
+    segments = []
+    for seg in constant_speed_segments(t, smooth):
+        start, stop = seg.start + trim, seg.stop - trim
+        if stop - start < 10:
+            continue
+        slope = float(np.polyfit(t[start:stop] - t[start], x[start:stop], 1)[0])
+        if abs(slope) * (t[stop - 1] - t[start]) < MIN_TRAVEL:
+            continue  # a slow drift or the crest of a wobble, not a run
+        speed[start:stop] = slope
+        accel[start:stop] = 0.0
+        segments.append(Segment(start, stop, slope))
+    return speed, accel, segments
+
+
+def _odd_below(n: int) -> int:
+    return n if n % 2 else n - 1
+
+
+def constant_speed_segments(time, speed, tolerance: float = PLATEAU_TOLERANCE,
+                            min_duration: float = 0.05, min_rows: int = 10) -> list[Segment]:
+    """The plateaus of a speed record: runs of one sign within ``tolerance`` of their mean.
+
+    Parameters
+    ----------
+    time : array_like
+        Time [s].
+    speed : array_like
+        Speed [rad/s].
+    tolerance : float
+        Largest relative deviation from the running mean of the plateau [-].
+    min_duration : float
+        Shortest plateau [s].
+    min_rows : int
+        Fewest rows of a plateau.
+
+    Returns
+    -------
+    list of Segment
+        In time order.
+    """
+    t = np.asarray(time, dtype=float)
+    w = np.asarray(speed, dtype=float)
+    top = float(np.max(np.abs(w))) if w.size else 0.0
+    out: list[Segment] = []
+    start, total = 0, 0.0
+    for i in range(w.size):
+        n = i - start
+        mean = total / n if n else w[i]
+        if n and (abs(w[i] - mean) > tolerance * abs(mean) or abs(mean) < 1e-3 * top):
+            _close(out, t, start, i, total / n, min_duration, min_rows, top)
+            start, total = i, 0.0
+        total += w[i]
+    if w.size:
+        _close(out, t, start, w.size, total / max(w.size - start, 1), min_duration, min_rows, top)
+    return out
+
+
+def _close(out, t, start, stop, mean, min_duration, min_rows, top):
+    if stop - start >= min_rows and t[stop - 1] - t[start] >= min_duration and abs(mean) >= 1e-3 * top:
+        out.append(Segment(int(start), int(stop), float(mean)))
+
+
+
+
+def distinct_speeds(segments) -> list[float]:
+    """The distinct plateau speeds [rad/s], ascending (within a factor `SPEED_STEP` they are one)."""
+    speeds = sorted(abs(s.speed) for s in segments)
+    out: list[float] = []
+    for v in speeds:
+        if not out or v > SPEED_STEP * out[-1]:
+            out.append(v)
+    return out
+
+
+def running_checks(meas, drive) -> tuple[list, dict]:
+    """The checks of a running-torque record and its data summary.
+
+    Parameters
+    ----------
+    meas : hdsim.io.measurement.Measurement
+        A ``running_torque`` record.
+    drive : hdsim.io.data_checks.DriveScale
+        The datasheet numbers (catalog running torque on the input, ratio).
+
+    Returns
+    -------
+    tuple of (list of Check, dict)
+        The checks and ``noise_floor_Nm``, ``torque_noise_Nm``, ``plateaus``, ``speeds_rpm``,
+        ``reversals`` and, with a temperature column, ``temperature_span_K``.
+    """
+    torque = np.asarray(meas.torque, dtype=float)
+    noise = noise_level(torque)
+    data = {"noise_floor_Nm": noise, "torque_noise_Nm": noise}
+    _, _, segments = sweep_kinematics(meas.time, meas.wg_angle)
+    checks = []
+    if not segments:
+        checks.append(Check("turns_steadily", "fail", "the drive never turns at a steady speed: this looks like "
+                             "a locked (stiffness) or breakaway test, not a friction sweep"))
+        return checks, {**data, "plateaus": 0, "speeds_rpm": [], "reversals": 0}
+    speeds = distinct_speeds(segments)
+    reversals = int(sum(np.sign(a.speed) != np.sign(b.speed) for a, b in zip(segments, segments[1:])))
+    data.update(plateaus=len(segments), speeds_rpm=[v * RPM_PER_RAD_S for v in speeds], reversals=reversals)
+    checks.append(Check("turns_steadily", "ok", f"{len(segments)} plateaus of constant speed at "
+                         f"{', '.join(f'{v * RPM_PER_RAD_S:.3g}' for v in speeds)} rpm of the wave generator"))
+    levels = [float(np.median(torque[s.start:s.stop])) for s in segments]
+    follows = [np.sign(level) == np.sign(s.speed) for level, s in zip(levels, segments)]
+    if np.mean(follows) < 0.75:
+        checks.append(Check("torque_opposes_motion", "warn", f"the torque has the sign of the motion on "
+                             f"{sum(follows)} of {len(follows)} plateaus: an offset or a load larger than the "
+                             "friction, or the torque's sign convention is the other way"))
+    else:
+        checks.append(Check("torque_opposes_motion", "ok", "the torque changes sign with the direction"))
+    if len(speeds) < 2:
+        checks.append(Check("speeds", "warn", "one running speed: a loss that grows with speed (damping) "
+                             "cannot be told from a constant level (friction); record at least three speeds"))
+    else:
+        checks.append(Check("speeds", "ok", f"{len(speeds)} distinct speeds"))
+    directions = {int(np.sign(s.speed)) for s in segments}
+    checks.append(Check("reversals", "ok" if len(directions) == 2 else "warn",
+                         f"{reversals} reversals" if len(directions) == 2 else
+                         "one direction only: a level that differs between directions cannot be seen"))
+    checks.append(_sideCheck(meas, drive, levels))
+    if meas.temperature is not None:
+        span = float(np.ptp(meas.temperature))
+        data["temperature_span_K"] = span
+        checks.append(Check("temperature", "warn" if span > TEMPERATURE_SPAN else "ok",
+                             f"the temperature spans {span:.3g} K" + (": grease friction changes with it; "
+                             "the fit assumes one temperature" if span > TEMPERATURE_SPAN else "")))
+    level = float(np.median(np.abs(levels)))
+    checks.append(Check("torque_noise", "warn" if noise > NOISE_SHARE * level else "ok",
+                         f"torque noise {noise:.3g} N·m against a running level of {level:.3g} N·m"))
+    return checks, data
+
+
+def _sideCheck(meas, drive, levels):
+    """Is the running level plausible on the side the file names, for this drive?"""
+    catalog = getattr(drive, "running_torque", None)
+    ratio = abs(float(meas.ratio)) if meas.ratio is not None else abs(getattr(drive, "ratio", 1.0))
+    if not catalog:
+        return Check("torque_side", "ok", "no catalog running torque to compare with")
+    side = meas.torque_side
+    expected = catalog * (ratio if side == "output" else 1.0)
+    level = float(np.median(np.abs(levels)))
+    factor = level / expected if expected > 0 else math.inf
+    if factor > SIDE_FACTOR or factor < 1.0 / SIDE_FACTOR:
+        other = "output" if side == "input" else "input"
+        return Check("torque_side", "warn", f"the running level {level:.3g} N·m is {factor:.3g}× the catalog "
+                      f"running torque of {drive.name} on the {side} ({expected:.3g} N·m at 2000 rpm): is the "
+                      f"torque on the {other} shaft (--meta torque_side={other}), or in other units?")
+    return Check("torque_side", "ok", f"the running level {level:.3g} N·m is {factor:.2g}× the catalog running "
+                  f"torque of {drive.name} on the {side} shaft")

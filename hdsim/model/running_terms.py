@@ -1,0 +1,268 @@
+"""The families of a running-torque test, as terms of the one running-torque law.
+
+A running-torque record (a friction sweep) is fitted with the law of
+`hdsim.model.input_friction` (``InputFriction.torque``), which is linear in every
+amplitude once the Stribeck speed is fixed. Each family switches on the amplitudes it
+owns; each term carries its own behaviour (`RunningTerm.columns` and
+`RunningTerm.write_back`), so the fit and the diagnosis never ask which term is which:
+
+| family | term (id) | amplitudes | signature in a sweep |
+|---|---|---|---|
+| base (always) | ``coulomb`` | ``F_c`` | one level, the same at every speed and both directions |
+| ``friction`` | ``stribeck`` | ``F_s − F_c`` (Stribeck rise at low speed, grid over ``ω_s``), ``Δ`` (forward ≠ reverse) | excess at low speed; a level that depends on the direction |
+| ``damping`` | ``viscous`` | ``b`` | torque growing in proportion to speed |
+| ``ripple`` | ``ripple`` | ``F_c r_k cos φ_k``, ``F_c r_k sin φ_k`` at orders 1, 2, 4 of the WG angle and 1 of the output | torque periodic in angle |
+
+The columns are the law itself evaluated with one amplitude set to 1 and the others to 0
+(the law is linear in them), so the fitted model is exactly ``InputFriction.torque``
+with the fitted values: there is no second copy of the law. The base also holds the
+inertia of motor and WG, ``J α``, which shows in a torque taken from motor current
+wherever the speed changes.
+
+The mesh-loss coefficient ``μ`` of the law is not a term: in a sweep at one constant load
+it is a constant added to ``F_c`` and cannot be told from it (docs/physics.md,
+running torque).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import ClassVar
+
+import numpy as np
+
+from hdsim.errors import InputError, unknown_name
+from hdsim.model.input_friction import InputFriction
+
+__all__ = ["RunningTerm", "CoulombLevel", "StribeckFriction", "ViscousLoss", "PositionRipple",
+           "RUNNING_FAMILIES", "BASE_TERM", "unit_law", "parse_running_effects"]
+
+#: orders of the WG angle the ripple term carries (the output's 1× is added as 1/N)
+WG_RIPPLE_ORDERS = (1.0, 2.0, 4.0)
+
+
+def unit_law(velocity_scale: float, stribeck_speed: float = 1.0, **amplitudes) -> InputFriction:
+    """The law with every amplitude 0 except those given (a column of the fit).
+
+    Parameters
+    ----------
+    velocity_scale : float
+        ω_ε [rad/s] of the smooth sign.
+    stribeck_speed : float
+        ω_s [rad/s].
+    **amplitudes
+        ``InputFriction`` fields to set (``coulomb_torque``, ``starting_torque``, …).
+
+    Returns
+    -------
+    InputFriction
+        The law.
+    """
+    fields = dict(starting_torque=0.0, coulomb_torque=0.0, viscous=0.0, stribeck_speed=stribeck_speed,
+                  velocity_scale=velocity_scale)
+    fields.update(amplitudes)
+    return InputFriction(**fields)
+
+
+def _sign(speed, velocity_scale):
+    """The law's smooth sign of the speed (a unit Coulomb level), for the other shapes."""
+    return unit_law(velocity_scale, coulomb_torque=1.0, starting_torque=1.0).torque(speed, 0.0)
+
+
+@dataclass(frozen=True)
+class Columns:
+    """Columns of one term: names, matrix (n, k) and the bounds of each amplitude."""
+
+    names: tuple[str, ...]
+    matrix: np.ndarray
+    lower: tuple[float, ...]
+    upper: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class RunningTerm:
+    """One family's part of the running-torque law."""
+
+    family: ClassVar[str] = ""
+    id: ClassVar[str] = ""
+    #: what the term looks like in a sweep (for reports)
+    signature: ClassVar[str] = ""
+
+    def grid(self, speeds: np.ndarray) -> tuple[float, ...]:
+        """Values of the term's non-linear parameter to try (``()``: none)."""
+        return ()
+
+    def columns(self, speed, angle, velocity_scale: float, ratio: float, nonlinear: float | None) -> Columns:
+        """The law's columns for this term along the record."""
+        raise NotImplementedError
+
+    def write_back(self, law: InputFriction, coefficients: dict, nonlinear: float | None) -> InputFriction:
+        """The law with this term's fitted amplitudes (``coefficients`` by column name)."""
+        raise NotImplementedError
+
+    def other_shapes(self, speed, angle, velocity_scale: float, ratio: float, nonlinear) -> Columns | None:
+        """Shapes of the same family that the law's form lacks (None: none).
+
+        Not part of the law: a diagnosis lets a family already in the model take these
+        too before it credits a new family with what is left, so that a family is not
+        added only because another family's form is imperfect (docs/physics.md, running
+        torque; `hdsim.identification.running_diagnosis`).
+        """
+        return None
+
+
+@dataclass(frozen=True)
+class CoulombLevel(RunningTerm):
+    """Base: one Coulomb level ``F_c``, the same both ways and at every speed."""
+
+    family: ClassVar[str] = "base"
+    id: ClassVar[str] = "coulomb"
+    signature: ClassVar[str] = "one level at every speed, both directions"
+
+    def columns(self, speed, angle, velocity_scale, ratio, nonlinear):
+        law = unit_law(velocity_scale, coulomb_torque=1.0, starting_torque=1.0)
+        return Columns(("coulomb_torque",), law.torque(speed, angle)[:, None], (0.0,), (math.inf,))
+
+    def write_back(self, law, coefficients, nonlinear):
+        level = float(coefficients["coulomb_torque"])
+        return replace(law, coulomb_torque=level, starting_torque=level)
+
+
+@dataclass(frozen=True)
+class StribeckFriction(RunningTerm):
+    """Friction: the Stribeck rise ``F_s − F_c`` below ``ω_s`` and the direction asymmetry ``Δ``."""
+
+    family: ClassVar[str] = "friction"
+    id: ClassVar[str] = "stribeck"
+    signature: ClassVar[str] = "more torque at low speed; a level that depends on the direction"
+
+    def grid(self, speeds):
+        """Stribeck speeds from a fifth of the slowest to the fastest steady speed (log-spaced)."""
+        slow, fast = float(np.min(speeds)), float(np.max(speeds))
+        return tuple(np.geomspace(0.2 * slow, max(fast, 0.4 * slow), 16))
+
+    def columns(self, speed, angle, velocity_scale, ratio, nonlinear):
+        rise = unit_law(velocity_scale, stribeck_speed=nonlinear, starting_torque=1.0).torque(speed, angle)
+        asym = unit_law(velocity_scale, coulomb_asymmetry=1.0).torque(speed, angle)
+        return Columns(("stribeck_rise", "coulomb_asymmetry"), np.column_stack([rise, asym]),
+                       (0.0, -math.inf), (math.inf, math.inf))
+
+    def other_shapes(self, speed, angle, velocity_scale, ratio, nonlinear):
+        sign = _sign(speed, velocity_scale)
+        x = np.abs(speed) / nonlinear
+        return Columns(("stribeck_exponential", "stribeck_lorentzian"),
+                       np.column_stack([sign * np.exp(-x), sign / (1.0 + x * x)]), (0.0, 0.0), (math.inf, math.inf))
+
+    def write_back(self, law, coefficients, nonlinear):
+        return replace(law, starting_torque=law.coulomb_torque + float(coefficients["stribeck_rise"]),
+                       stribeck_speed=float(nonlinear), coulomb_asymmetry=float(coefficients["coulomb_asymmetry"]))
+
+
+@dataclass(frozen=True)
+class ViscousLoss(RunningTerm):
+    """Damping: the viscous (churning) loss ``b ω``."""
+
+    family: ClassVar[str] = "damping"
+    id: ClassVar[str] = "viscous"
+    signature: ClassVar[str] = "torque growing in proportion to speed"
+
+    def columns(self, speed, angle, velocity_scale, ratio, nonlinear):
+        law = unit_law(velocity_scale, viscous=1.0)
+        return Columns(("viscous",), law.torque(speed, angle)[:, None], (0.0,), (math.inf,))
+
+    def other_shapes(self, speed, angle, velocity_scale, ratio, nonlinear):
+        sign = _sign(speed, velocity_scale)
+        w = np.abs(speed)
+        return Columns(("churning_sqrt", "churning_square"), np.column_stack([sign * np.sqrt(w), sign * w * w]),
+                       (0.0, 0.0), (math.inf, math.inf))
+
+    def write_back(self, law, coefficients, nonlinear):
+        return replace(law, viscous=float(coefficients["viscous"]))
+
+
+@dataclass(frozen=True)
+class PositionRipple(RunningTerm):
+    """Ripple: the Coulomb level modulated at orders 1, 2, 4 of the WG angle and 1 of the output.
+
+    ``output_order`` False drops the output's 1×: over less than one output revolution
+    a periodic term cannot be told from a drift.
+    """
+
+    family: ClassVar[str] = "ripple"
+    id: ClassVar[str] = "ripple"
+    signature: ClassVar[str] = "torque periodic in the wave-generator or output angle"
+    output_order: bool = True
+
+    def orders(self, ratio: float) -> tuple[float, ...]:
+        """Orders of the WG angle [-]."""
+        return WG_RIPPLE_ORDERS + ((1.0 / abs(ratio),) if self.output_order else ())
+
+    def columns(self, speed, angle, velocity_scale, ratio, nonlinear):
+        level = unit_law(velocity_scale, coulomb_torque=1.0, starting_torque=1.0).torque(speed, angle)
+        names, cols = [], []
+        for k in self.orders(ratio):
+            for part, phase in (("cos", 0.0), ("sin", -0.5 * math.pi)):
+                law = unit_law(velocity_scale, coulomb_torque=1.0, starting_torque=1.0,
+                               ripple_orders=(k,), ripple_amplitudes=(1.0,), ripple_phases=(phase,))
+                names.append(f"ripple_{part}_{k:.6g}")
+                cols.append(law.torque(speed, angle) - level)
+        n = len(names)
+        return Columns(tuple(names), np.column_stack(cols), (-math.inf,) * n, (math.inf,) * n)
+
+    def other_shapes(self, speed, angle, velocity_scale, ratio, nonlinear):
+        sign = _sign(speed, velocity_scale)
+        names, cols = [], []
+        for k in (3.0, 6.0, 8.0):
+            names += [f"harmonic_cos_{k:g}", f"harmonic_sin_{k:g}"]
+            cols += [sign * np.cos(k * angle), sign * np.sin(k * angle)]
+        return Columns(tuple(names), np.column_stack(cols), (-math.inf,) * 6, (math.inf,) * 6)
+
+    def write_back(self, law, coefficients, nonlinear):
+        level = law.coulomb_torque
+        orders, amps, phases = [], [], []
+        for name, a in coefficients.items():
+            part, k = name.split("_")[1:]
+            if part != "cos":
+                continue
+            b = coefficients[f"ripple_sin_{k}"]
+            # F_c r cos(kθ + φ) = a cos kθ + b sin kθ  ->  r = |(a, b)|/F_c, φ = atan2(−b, a)
+            orders.append(float(k))
+            amps.append(math.hypot(a, b) / level if level > 0 else 0.0)
+            phases.append(math.atan2(-b, a))
+        return replace(law, ripple_orders=tuple(orders), ripple_amplitudes=tuple(amps), ripple_phases=tuple(phases))
+
+
+#: the base model of a running-torque test
+BASE_TERM = CoulombLevel()
+#: family -> term of a running-torque test
+RUNNING_FAMILIES: dict[str, RunningTerm] = {"friction": StribeckFriction(), "damping": ViscousLoss(),
+                                            "ripple": PositionRipple()}
+
+
+def parse_running_effects(text) -> list[str]:
+    """``'friction,ripple'`` or term ids (``'stribeck,viscous'``) -> the families, in the given order.
+
+    Raises
+    ------
+    InputError
+        On a name that is neither a running-torque family nor a term id.
+    """
+    if text is None:
+        return []
+    items = text if isinstance(text, (list, tuple, set, dict)) else str(text).split(",")
+    by_id = {term.id: family for family, term in RUNNING_FAMILIES.items()}
+    out: list[str] = []
+    for raw in items:
+        item = str(raw).strip().partition("=")[0].strip()
+        if not item or item == "none":
+            continue
+        family = item if item in RUNNING_FAMILIES else by_id.get(item)
+        if family is None:
+            if item in ("hardening", "backlash", "kinematic_error"):
+                raise InputError(f"the {item} family acts in the elastic path and is not part of a running-torque "
+                                 f"test; its families are {', '.join(RUNNING_FAMILIES)}")
+            raise unknown_name("running-torque family or effect", item, [*RUNNING_FAMILIES, *by_id])
+        if family not in out:
+            out.append(family)
+    return out

@@ -1,0 +1,254 @@
+"""Running-torque tests (friction sweeps): reading, the shared law, fit, checks and the CLI.
+
+Data here come from closed forms written in this file (plateaus of constant speed with
+the law's terms) or from the library's own law where the test is of the fit's machinery
+(exact recovery); discovery on independent data is `tests/test_running_torque_battery.py`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from hdsim.errors import InputError
+from hdsim.identification.running_diagnosis import diagnose_running
+from hdsim.identification.running_fit import SweepRecord, fit_running
+from hdsim.io.data_checks import DriveScale, examine
+from hdsim.io.measurement import load_measurement, make_measurement, save_measurement
+from hdsim.io.running_checks import sweep_kinematics
+from hdsim.model.catalog import load_unit
+from hdsim.model.input_friction import InputFriction, for_unit
+from hdsim.model.running_terms import parse_running_effects
+
+RATIO = 100.0
+
+
+def sweep_profile(speeds=(3.0, 30.0, 150.0), fs=1000.0, dwell_turns=3.0, ramp=0.1):
+    """Time, WG angle, speed and acceleration of a sweep: each speed forward and back, linear ramps."""
+    knots_t, knots_w = [0.0], [0.0]
+    for w in speeds:
+        for sign in (1.0, -1.0):
+            cruise = dwell_turns * 2 * math.pi / w
+            t = knots_t[-1]
+            knots_t += [t + ramp, t + ramp + cruise, t + 2 * ramp + cruise]
+            knots_w += [sign * w, sign * w, 0.0]
+    t = np.arange(0.0, knots_t[-1], 1.0 / fs)
+    w = np.interp(t, knots_t, knots_w)
+    a = np.gradient(w, t)
+    theta = np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * np.diff(t))])
+    return t, theta, w, a
+
+
+def law_record(law: InputFriction, inertia=2e-5, noise=0.0, seed=0, side="input", **profile):
+    """A running-torque measurement made with the library's own law (fit machinery tests)."""
+    t, theta, w, a = sweep_profile(**profile)
+    torque = law.torque(w, theta) + inertia * a
+    torque = torque + np.random.default_rng(seed).normal(0.0, noise, t.size) if noise else torque
+    factor = RATIO if side == "output" else 1.0
+    return make_measurement("running_torque", t, factor * torque, None, wg_angle=theta, ratio=RATIO,
+                            meta={"torque_side": side})
+
+
+FULL = InputFriction(starting_torque=0.09, coulomb_torque=0.05, viscous=2e-4, stribeck_speed=8.0,
+                     velocity_scale=0.05, ripple_orders=(1.0, 2.0), ripple_amplitudes=(0.05, 0.12),
+                     ripple_phases=(0.3, -1.0), coulomb_asymmetry=0.006)
+
+
+# --------------------------------------------------------------------------- the law
+
+
+def test_ripple_averages_out_over_a_turn_and_the_law_is_dissipative():
+    theta = np.linspace(0.0, 2 * math.pi, 4001)[:-1]
+    for w in (0.5, 10.0, 200.0):
+        assert np.mean(FULL.torque(w, theta)) == pytest.approx(FULL.running_torque(w), rel=1e-12)
+        # the running torque by its closed form: F_c + Δ + (F_s − F_c) e^{−(ω/ω_s)²} + b ω (tanh ≈ 1 here)
+        closed = 0.05 + 0.006 + 0.04 * math.exp(-(w / 8.0) ** 2) + 2e-4 * w
+        assert FULL.running_torque(w) == pytest.approx(closed, rel=1e-7)
+        assert np.all(FULL.torque(w, theta) * w > 0)  # opposes the motion at every angle
+    assert FULL.dissipative
+    assert not FULL.with_updates(coulomb_asymmetry=0.05).dissipative
+
+
+def test_mesh_torque_adds_mu_times_the_transmitted_torque():
+    law = FULL.with_updates(load_coefficient=0.1, ripple_orders=(), ripple_amplitudes=(), ripple_phases=())
+    assert law.torque(100.0, 0.0, mesh_torque=0.87) - law.torque(100.0, 0.0) == pytest.approx(0.087, rel=1e-9)
+    assert law.torque(-100.0, 0.0, mesh_torque=-0.87) - law.torque(-100.0, 0.0) == pytest.approx(-0.087, rel=1e-9)
+
+
+def test_a_scenario_refuses_a_law_that_would_deliver_power():
+    with pytest.raises(InputError, match="delivers power"):
+        for_unit(load_unit(), {"ripple_amplitudes": [0.6, 0.6]})
+
+
+# --------------------------------------------------------------------------- reading
+
+
+def test_one_angle_and_the_ratio_give_the_other(tmp_path):
+    path = tmp_path / "sweep.csv"
+    path.write_text("# test: running_torque\n# ratio: 50\n# torque_side: output\n"
+                    "time_s,output_angle_deg,torque_Nm,temperature_C\n"
+                    + "".join(f"{0.01 * i},{0.1 * i},2.0,{20 + 0.01 * i}\n" for i in range(30)))
+    meas = load_measurement(path)
+    assert meas.torque_side == "output"
+    assert np.allclose(meas.wg_angle, np.radians(0.1 * np.arange(30)) * 50)
+    assert meas.temperature[-1] == pytest.approx(20.29)
+    back = load_measurement(save_measurement(meas, tmp_path / "again.csv"))
+    assert np.array_equal(back.wg_angle, meas.wg_angle) and back.torque_side == "output"
+
+
+@pytest.mark.parametrize("head, match", [
+    ("# test: running_torque\n# ratio: 100\ntime_s,wg_angle_rad,torque_Nm\n", None),
+    ("# test: running_torque\ntime_s,wg_angle_rad,torque_Nm\n", "needs the transmission ratio"),
+    ("# test: running_torque\ntime_s,output_angle_rad,torque_Nm\n", "needs the transmission ratio"),
+    ("# test: running_torque\n# ratio: 100\ntime_s,torque_Nm\n", "at least one of them"),
+    ("# test: running_torque\n# ratio: 100\n# torque_side: motor\ntime_s,wg_angle_rad,torque_Nm\n", "input or output"),
+])
+def test_running_torque_files_are_refused_in_one_line(tmp_path, head, match):
+    path = tmp_path / "bad.csv"
+    cols = head.strip().splitlines()[-1].count(",") + 1
+    path.write_text(head + "".join(",".join([str(0.01 * i)] * cols) + "\n" for i in range(20)))
+    if match is None:
+        assert load_measurement(path).test == "running_torque"
+        return
+    with pytest.raises(InputError, match=match) as err:
+        load_measurement(path)
+    assert "\n" not in str(err.value)
+
+
+def test_plateau_speed_is_the_slope_of_the_angle_despite_encoder_steps():
+    t, theta, w, _ = sweep_profile(speeds=(2.0, 40.0))
+    step = 2 * math.pi / 2**14  # a 14-bit encoder
+    speed, accel, segments = sweep_kinematics(t, np.round(theta / step) * step)
+    assert len(segments) == 4
+    for seg in segments:
+        assert abs(seg.speed) == pytest.approx(abs(w[(seg.start + seg.stop) // 2]), rel=2e-3)
+        assert np.all(accel[seg.start:seg.stop] == 0.0)
+
+
+# --------------------------------------------------------------------------- fit
+
+
+def test_the_fit_recovers_the_law_that_made_the_data():
+    fit = fit_running(law_record(FULL), ["friction", "damping", "ripple"])
+    law = fit.law
+    # 1 % of the level: the Stribeck grid's nearest speed, and the speed and acceleration
+    # derivatives smoothing the kinks of the linear ramps
+    assert fit.rmse_Nm < 1e-3
+    assert law.coulomb_torque == pytest.approx(0.05, rel=0.02)
+    assert law.viscous == pytest.approx(2e-4, rel=0.02)
+    assert law.coulomb_asymmetry == pytest.approx(0.006, rel=0.02)
+    assert fit.inertia == pytest.approx(2e-5, rel=0.05)
+    amplitudes = dict(zip(law.ripple_orders, law.ripple_amplitudes))
+    assert amplitudes[2.0] == pytest.approx(0.12, rel=0.03) and amplitudes[1.0] == pytest.approx(0.05, rel=0.05)
+    # the contract's metrics: mean torque magnitude on the plateaus of each direction
+    rec = fit.record
+    for name, direction in (("running_torque_forward_Nm", 1), ("running_torque_reverse_Nm", -1)):
+        rows = rec.steady(direction)
+        expected = np.mean(np.abs(FULL.torque(rec.speed[rows], rec.measurement.wg_angle[rows])))
+        assert fit.metrics()[name] == pytest.approx(expected, rel=0.01)
+
+
+def test_an_output_side_record_gives_the_same_law_and_torques_times_the_ratio():
+    law = FULL.with_updates(ripple_orders=(), ripple_amplitudes=(), ripple_phases=())
+    on_input = fit_running(law_record(law, noise=1e-3), ["friction", "damping"])
+    on_output = fit_running(law_record(law, noise=1e-3, side="output"), ["friction", "damping"])
+    assert on_output.law.coulomb_torque == pytest.approx(on_input.law.coulomb_torque, rel=1e-9)
+    assert on_output.rmse_Nm == pytest.approx(RATIO * on_input.rmse_Nm, rel=1e-9)
+    assert on_output.metrics()["running_torque_forward_Nm"] == pytest.approx(
+        RATIO * on_input.metrics()["running_torque_forward_Nm"], rel=1e-9)
+
+
+def test_effects_of_the_elastic_path_are_refused_for_a_sweep():
+    assert parse_running_effects("stribeck,ripple") == ["friction", "ripple"]
+    with pytest.raises(InputError, match="elastic path"):
+        parse_running_effects("hardening")
+
+
+def test_diagnosis_adds_what_the_law_made_and_nothing_more():
+    law = FULL.with_updates(starting_torque=0.05, coulomb_asymmetry=0.0, ripple_orders=(), ripple_amplitudes=(),
+                            ripple_phases=())  # Coulomb + viscous only
+    d = diagnose_running(law_record(law, noise=2e-3, seed=3), [])
+    assert d.added == ["damping"]
+    assert d.success
+    nothing = diagnose_running(law_record(law.with_updates(viscous=0.0), noise=2e-3, seed=4), [])
+    assert nothing.added == [] and nothing.success
+
+
+# --------------------------------------------------------------------------- checks
+
+
+def test_a_record_that_never_turns_steadily_is_the_wrong_test():
+    t = np.linspace(0.0, 4.0, 2000)
+    meas = make_measurement("running_torque", t, np.sin(t), None, wg_angle=1e-3 * np.sin(3 * t), ratio=RATIO)
+    checks, _, wrong = examine(meas, DriveScale.of(load_unit()))
+    assert "never turns at a steady speed" in wrong
+
+
+def test_one_speed_and_a_torque_on_the_other_shaft_are_warned():
+    law = FULL.with_updates(ripple_orders=(), ripple_amplitudes=(), ripple_phases=())
+    t, theta, w, a = sweep_profile(speeds=(100.0,))
+    meas = make_measurement("running_torque", t, RATIO * law.torque(w, theta), None, wg_angle=theta, ratio=RATIO)
+    checks, data, wrong = examine(meas, DriveScale.of(load_unit()))
+    status = {c.check: c.status for c in checks}
+    assert not wrong and status["speeds"] == "warn" and status["torque_side"] == "warn"
+    assert "torque_side=output" in next(c.message for c in checks if c.check == "torque_side")
+    assert data["speeds_rpm"] == [pytest.approx(100.0 * 30 / math.pi, rel=1e-3)]
+
+
+# --------------------------------------------------------------------------- command line
+
+
+def test_fit_and_diagnose_on_the_command_line(cli, tmp_path):
+    save_measurement(law_record(FULL, noise=2e-3), tmp_path / "sweep.csv")
+    code, stdout, stderr = cli("fit", "sweep.csv", "--effects", "friction,damping,ripple", "--json", cwd=tmp_path)
+    assert code == 0, stderr
+    out = json.loads(stdout)
+    assert set(out["metrics"]) == {"running_torque_forward_Nm", "running_torque_reverse_Nm"}
+    assert out["rmse_Nm"] == pytest.approx(2e-3, rel=0.15) and out["noise_floor_Nm"] == pytest.approx(2e-3, rel=0.15)
+    assert all((tmp_path / f).exists() for f in ("sweep.fit.toml", "sweep.fit.torque_vs_speed.png",
+                                                 "sweep.fit.ripple.png"))
+    code, stdout, stderr = cli("diagnose", "sweep.csv", "--json", "--report", "rep", cwd=tmp_path)
+    assert code == 0, stderr
+    out = json.loads(stdout)
+    assert out["test"] == "running_torque" and out["outcome"] == "found"
+    assert set(out["added"]) == {"friction", "damping", "ripple"}
+    assert {"family", "effect", "rmse_Nm", "score"} <= set(out["ranking"][0])
+    assert (tmp_path / "rep" / "index.html").exists()
+    code, _, stderr = cli("fit", "sweep.csv", "--effects", "backlash", cwd=tmp_path)
+    assert code == 2 and "elastic path" in stderr
+
+
+def test_a_fitted_law_pasted_into_a_scenario_runs_the_measured_friction():
+    """The fit's `law` table is a scenario's [input_friction]: the simulated bench then needs the
+    fitted law's running torque at every speed (one law, no second copy)."""
+    from hdsim import run_scenario
+    from hdsim.scenarios.scenario import load_scenario
+    from pathlib import Path
+
+    law = FULL.with_updates(load_coefficient=0.0)
+    fit = fit_running(law_record(law, noise=1e-3), ["friction", "damping", "ripple"])
+    sc = load_scenario(Path(__file__).resolve().parents[1] / "scenarios" / "running_torque.toml").with_updates(
+        {"input.speeds_rpm": [60.0, 900.0], "input.revolutions": 1.0, "input.settle_revolutions": 0.25,
+         "metrics": ["running_torque_sweep"],
+         **{f"input_friction.{k}": v for k, v in {**fit.law_table(), "load_coefficient": 0.0}.items()}})
+    run = run_scenario(load_unit(), sc)
+    for rpm in (60.0, 900.0):
+        w = rpm * math.pi / 30
+        both_ways = 0.5 * (fit.law.running_torque(w) - fit.law.running_torque(-w))  # the asymmetry cancels
+        assert run.metric(f"running_torque_{rpm:g}rpm_mNm") == pytest.approx(1e3 * both_ways, rel=2e-3)
+
+
+
+def test_halves_too_short_to_fit_add_nothing_unvalidated():
+    from hdsim.identification import running_diagnosis as rd
+
+    rec = SweepRecord.of(law_record(FULL))
+    empty = np.zeros(rec.speed.size, dtype=bool)
+    folds = ([empty, empty], [empty, empty])  # nothing to fit a half on
+    assert rd._holdout_rss(rec, [], folds) is None
+    step = rd.RunningStep([], fit_running(rec, []), None)
+    cand = rd._try(rec, step, "friction", folds, at_floor=False)
+    assert not cand.accepted and "too short" in cand.reason
