@@ -83,6 +83,19 @@ def say_checks(verb: str, checks) -> None:
             print(f"hdsim {verb}: {check['status']}: {check['message']}", file=sys.stderr, flush=True)
 
 
+def _emitted(args, summary: dict, checks: list, data: dict) -> bool:
+    """Put the checks and the data summary in ``summary``, say the checks that are not ok, and
+    print the JSON object if asked (True: the caller prints nothing more)."""
+    summary["checks"] = checks
+    summary["data"] = data
+    say_checks("fit", checks)
+    if args.json:
+        from hdsim.cli import emit_json
+
+        emit_json(summary)
+    return bool(args.json)
+
+
 def run(args) -> int:
     from hdsim.identification.fit import fit
     from hdsim.identification.outcome import plausibility
@@ -103,13 +116,7 @@ def run(args) -> int:
     summary["parameters_file"] = str(out)
     summary["whiteness"] = whiteness(result.residual)
     summary["findings"] = findings(meas, result.residual)
-    summary["checks"] = checks + plausibility(summary, scale)
-    summary["data"] = data
-    say_checks("fit", summary["checks"])
-    if args.json:
-        from hdsim.cli import emit_json
-
-        emit_json(summary)
+    if _emitted(args, summary, checks + plausibility(summary, scale), data):
         return 0
     print(f"{meas.source}: {meas.test} test, {len(meas)} rows, effects "
           f"{', '.join(result.families) or '(base model)'}")
@@ -138,13 +145,7 @@ def _run_running(args, meas, effects, checks, data, scale) -> int:
     summary = result.summary()
     summary["parameters_file"] = str(out)
     summary["figures"] = [str(f) for f in figures]
-    summary["checks"] = checks + running_plausibility(result, scale)
-    summary["data"] = data
-    say_checks("fit", summary["checks"])
-    if args.json:
-        from hdsim.cli import emit_json
-
-        emit_json(summary)
+    if _emitted(args, summary, checks + running_plausibility(result, scale), data):
         return 0
     m = summary["metrics"]
     print(f"{meas.source}: running_torque test, {len(meas)} rows, torque on the {meas.torque_side}, effects "

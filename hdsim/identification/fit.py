@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from hdsim.errors import InputError, SolverError, unknown_name
-from hdsim.identification.optimizer import bic, effective_n, fit_many, residuals, uncertainty
+from hdsim.identification.optimizer import FittedRows, bic, effective_n, fit_many, residuals, uncertainty
 from hdsim.identification.problem import K0_NAME, Evaluator, FitProblem, make_problem
 from hdsim.io.measurement import Measurement
 from hdsim.model import effects as fx
@@ -117,7 +117,7 @@ def build_model(unit, effects: dict[str, str], meas: Measurement | None = None) 
 
 
 @dataclass
-class FitResult:
+class FitResult(FittedRows):
     """A fitted model and what the fit says about it (``params``: dotted model overrides;
     ``internal``: the fitted coordinates K0, K_ratio, …; ``uncertainty`` keyed like
     ``internal``, plus ``offset_rad``).
@@ -173,15 +173,6 @@ class FitResult:
     @property
     def max_abs_rad(self) -> float:
         return float(np.max(np.abs(self.residual[self.rows])))
-
-    @property
-    def rss(self) -> float:
-        r = self.residual[self.rows]
-        return float(r @ r)
-
-    @property
-    def n(self) -> int:
-        return int(np.count_nonzero(self.rows))
 
     @property
     def bic(self) -> float:

@@ -26,7 +26,7 @@ import numpy as np
 
 from hdsim.identification.problem import Evaluator, FitProblem
 
-__all__ = ["fit_many", "residuals", "bic", "lag1", "effective_n", "uncertainty"]
+__all__ = ["fit_many", "residuals", "bic", "lag1", "effective_n", "uncertainty", "FittedRows"]
 
 
 def project(target: np.ndarray, basis: np.ndarray, rows: np.ndarray):
@@ -147,6 +147,22 @@ def _update(p: FitProblem, r_rows: np.ndarray, has_base: int, steps, trials, tol
         p.done, p.message = True, "converged: no step lowers the cost (a minimum)"
     elif p.iterations >= p.max_iter:
         p.done, p.message = True, f"not converged: stopped at the iteration limit ({p.max_iter})"
+
+
+class FittedRows:
+    """``rss`` and ``n`` over the rows a fit minimised (``residual`` and ``rows`` of a fit result)."""
+
+    residual: np.ndarray
+    rows: np.ndarray
+
+    @property
+    def rss(self) -> float:
+        r = self.residual[self.rows]
+        return float(r @ r)
+
+    @property
+    def n(self) -> int:
+        return int(np.count_nonzero(self.rows))
 
 
 def bic(rss: float, n: float, k: int) -> float:

@@ -31,7 +31,7 @@ import numpy as np
 from scipy.optimize import lsq_linear
 
 from hdsim.errors import InputError
-from hdsim.identification.optimizer import effective_n
+from hdsim.identification.optimizer import FittedRows, effective_n
 from hdsim.io.data_checks import noise_level
 from hdsim.io.measurement import Measurement
 from hdsim.io.running_checks import Segment, sweep_kinematics
@@ -136,7 +136,7 @@ class SweepRecord:
 
 
 @dataclass
-class RunningFit:
+class RunningFit(FittedRows):
     """The fitted running-torque law and what the fit says about it.
 
     Attributes
@@ -179,15 +179,6 @@ class RunningFit:
     @property
     def rmse_Nm(self) -> float:
         return self.rmse()
-
-    @property
-    def rss(self) -> float:
-        r = self.residual[self.rows]
-        return float(r @ r)
-
-    @property
-    def n(self) -> int:
-        return int(np.count_nonzero(self.rows))
 
     @property
     def n_eff(self) -> float:
