@@ -202,7 +202,7 @@ def test_one_speed_and_a_torque_on_the_other_shaft_are_warned():
 
 
 def test_fit_and_diagnose_on_the_command_line(cli, tmp_path):
-    save_measurement(law_record(FULL, noise=2e-3), tmp_path / "sweep.csv")
+    save_measurement(law_record(FULL, noise=2e-3, fs=300.0), tmp_path / "sweep.csv")
     code, stdout, stderr = cli("fit", "sweep.csv", "--effects", "friction,damping,ripple", "--json", cwd=tmp_path)
     assert code == 0, stderr
     out = json.loads(stdout)

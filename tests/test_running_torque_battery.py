@@ -13,6 +13,7 @@ from __future__ import annotations
 import functools
 import importlib.util
 import os
+import sys
 from pathlib import Path
 
 import pytest
@@ -26,6 +27,10 @@ def _battery():
     path = Path(__file__).resolve().parents[1] / "validation" / "running_torque_battery.py"
     spec = importlib.util.spec_from_file_location("running_torque_battery", path)
     module = importlib.util.module_from_spec(spec)
+    # registered and importable by name: the battery's worker processes unpickle its functions
+    sys.modules[spec.name] = module
+    if str(path.parent) not in sys.path:
+        sys.path.insert(0, str(path.parent))
     spec.loader.exec_module(module)
     return module
 

@@ -24,11 +24,11 @@ TABLE = {"CSG-14-100": (35.0, 21.0, 2.21, 67.0, 10.0), "CSG-17-100": (51.0, 29.0
          "CSG-20-100": (105.0, 37.0, 3.89, 77.0, 52.0), "CSG-25-100": (195.0, 69.0, 7.26, 77.0, 87.0)}
 
 
-def short_scenario():
+def short_scenario(**updates):
     """The shipped scenario at 2000 rpm only, with fewer turns (same definitions)."""
     return load_scenario(ROOT / "scenarios" / "running_torque.toml").with_updates(
         {"input.speeds_rpm": [2000.0], "input.revolutions": 2.0, "input.settle_revolutions": 0.5,
-         "efficiency.revolutions": 2.0})
+         "efficiency.revolutions": 2.0, **updates})
 
 
 @pytest.mark.parametrize("unit", sorted(TABLE))
@@ -47,25 +47,29 @@ def test_one_mesh_loss_gives_every_catalog_efficiency_within_3_points(unit):
     assert 100.0 / (1.0 + mu + 100.0 * running * 1e-3 / rated) == pytest.approx(eta, abs=3.0)
 
 
-def check_against_catalog(unit):
+def check_against_catalog(unit, breakaway: bool = True):
     running, starting, backdriving, eta, _ = TABLE[unit]
-    run = run_scenario(load_unit(unit), short_scenario())
+    updates = {} if breakaway else {"metrics": ["running_torque_sweep", "efficiency"]}
+    run = run_scenario(load_unit(unit), short_scenario(**updates))
     assert run.metric("running_torque_2000rpm_mNm") == pytest.approx(running, rel=0.20)
     assert run.metric("efficiency_percent") == pytest.approx(eta, abs=3.0)
-    # the ripple raises the breakaway at WG angle 0 by ~11 % over the catalog's value
-    assert run.metric("starting_torque_mNm") == pytest.approx(starting, rel=0.20)
-    assert run.metric("backdriving_torque_Nm") == pytest.approx(backdriving, rel=0.20)
+    if breakaway:
+        # the ripple raises the breakaway at WG angle 0 by 10-18 % over the catalog's value
+        assert run.metric("starting_torque_mNm") == pytest.approx(starting, rel=0.20)
+        assert run.metric("backdriving_torque_Nm") == pytest.approx(backdriving, rel=0.20)
     return run
 
 
 def test_the_simulated_bench_reproduces_the_catalog_of_the_default_unit():
-    run = check_against_catalog("CSG-25-100")
+    """Running torque and efficiency (its starting torque: tests/test_driven_physics.py; every
+    size's breakaway figures: the slow test below)."""
+    run = check_against_catalog("CSG-25-100", breakaway=False)
     # the simulated efficiency is the law's closed form: the elastic path adds no loss at constant speed
     mu = for_unit(load_unit()).load_coefficient
     assert run.metric("efficiency_percent") == pytest.approx(100.0 / (1.0 + mu + 100.0 * 0.195 / 87.0), abs=0.3)
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("unit", ["CSG-14-100", "CSG-17-100", "CSG-20-100"])
+@pytest.mark.parametrize("unit", sorted(TABLE))
 def test_the_simulated_bench_reproduces_the_catalog_of_every_size(unit):
     check_against_catalog(unit)
