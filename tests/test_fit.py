@@ -418,3 +418,17 @@ def test_kinematic_error_fit_on_independent_truth_data(truth_ke):
     beyond = sum((ke["a2"] * iv(n, ke["kappa"]) / iv(1, ke["kappa"])) ** 2 / 2 for n in range(3, 12))
     floor = m["noise_rad"] ** 2 + m["quant_rad"] ** 2 / 12 + (m["wg_quant_rad"] / 100) ** 2 / 12
     assert res.rmse_rad == pytest.approx(np.sqrt(floor + beyond), rel=0.03)
+
+
+def test_a_trial_of_barely_hardening_far_beyond_the_structure_stays_a_valid_model():
+    """K∞ a hair above a K0 the nominal structure cannot reach: the stiffened branch asked for a
+    κ below its physical range, and one such trial failed a whole batch with an InputError (a
+    kinematic-error diagnosis under a load varying 3-9 N·m stopped on it)."""
+    from hdsim.identification.problem import split_stiffness
+    from hdsim.model.catalog import load_unit
+
+    model = load_unit()
+    for K0, ratio in ((1e7, 1.001), (1e6, 1.00001)):
+        updates, _ = split_stiffness(model, K0, ratio)
+        assert 1e-3 <= float(updates["calibration.kappa_mesh"]) <= 1e3
+        model.with_updates(updates)  # no InputError

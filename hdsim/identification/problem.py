@@ -32,7 +32,7 @@ import numpy as np
 from hdsim.io.data_checks import loading_direction
 from hdsim.errors import InputError
 from hdsim.io.measurement import Measurement
-from hdsim.model.drive import SLOTS, HarmonicDrive, compliance_chain
+from hdsim.model.drive import SLOTS, Calibration, HarmonicDrive, compliance_chain
 from hdsim.model.effects import FitContext
 from hdsim.simulation.quasistatic import locked_twist
 
@@ -142,7 +142,10 @@ def split_stiffness(model: HarmonicDrive, K0, ratio=1.0, e_cap: float = E_INF_CA
     chain_b = compliance_chain(replace(g, E=np.where(ok, E0, E_b)), wg, 1.0)
     cm_b = np.asarray(chain_b.mesh_zone, dtype=float)
     kappa_b = share * C0 / cm_b
-    out = {"calibration.kappa_mesh": np.where(ok, kappa_a, kappa_b)}
+    # an extreme trial (K∞ barely above K0 on the stiffened branch) may ask for a κ outside its
+    # physical range; the trial is then held at the bound instead of failing the whole batch
+    lo, hi = Calibration.param_meta()["kappa_mesh"]["bounds"]
+    out = {"calibration.kappa_mesh": np.clip(np.where(ok, kappa_a, kappa_b), lo, hi)}
     if not np.all(ok):
         out["flexspline.E"] = np.where(ok, E0, E_b)
     e = np.where(ok, e_a, np.where(hard, e_cap, 1.0))

@@ -245,7 +245,7 @@ class RunningFit(FittedRows):
                "metrics": {k: v for k, v in self.metrics().items() if v is not None},
                "fit": {"rows": self.n, "rmse_Nm": self.rmse_Nm, "n_params": self.n_params}}
         head = ("# hdsim running-torque fit. [input_friction] is on the wave-generator shaft and pastes into a\n"
-                "# driven scenario's [input_friction] table (docs/measurements.md, running torque).\n")
+                "# driven scenario's [input_friction] table (docs/cli.md, hdsim fit).\n")
         return head + tomli_w.dumps(doc)
 
     def save(self, path) -> Path:
