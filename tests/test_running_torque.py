@@ -252,3 +252,14 @@ def test_halves_too_short_to_fit_add_nothing_unvalidated():
     step = rd.RunningStep([], fit_running(rec, []), None)
     cand = rd._try(rec, step, "friction", folds, at_floor=False)
     assert not cand.accepted and "too short" in cand.reason
+
+
+def test_a_list_key_takes_a_toml_array_on_the_command_line():
+    from pathlib import Path
+
+    from hdsim.scenarios.scenario import load_scenario
+
+    sc = load_scenario(Path(__file__).resolve().parents[1] / "scenarios" / "running_torque.toml")
+    assert sc.with_updates({"input.speeds_rpm": "[500, 2000.5]"}).data["input"]["speeds_rpm"] == [500, 2000.5]
+    with pytest.raises(InputError, match="must be list"):
+        sc.with_updates({"input.speeds_rpm": "500 rpm"})

@@ -160,6 +160,15 @@ def _coerce(value, kind, key, source):
             pass
     if kind in (str, list) and isinstance(value, kind):
         return value
+    if kind is list and isinstance(value, str):  # --set input.speeds_rpm=[500,2000]: a TOML array
+        import tomllib
+
+        try:
+            parsed = tomllib.loads(f"v = {value}")["v"]
+        except (tomllib.TOMLDecodeError, ValueError):
+            parsed = None
+        if isinstance(parsed, list):
+            return parsed
     raise InputError(f"{source}: {key} must be {kind.__name__}, got {value!r}")
 
 
