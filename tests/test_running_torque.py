@@ -235,6 +235,12 @@ def test_a_fitted_law_pasted_into_a_scenario_runs_the_measured_friction():
          "metrics": ["running_torque_sweep"],
          **{f"input_friction.{k}": v for k, v in {**fit.law_table(), "load_coefficient": 0.0}.items()}})
     run = run_scenario(load_unit(), sc)
+    from types import SimpleNamespace
+
+    from hdsim.plotting.driven import plot_running_torque
+
+    assert plot_running_torque(run) is not None  # the sweep's figure, beside the catalog point
+    assert plot_running_torque(SimpleNamespace(metrics={"running_torque_mNm": 1.0}, model=run.model)) is None
     for rpm in (60.0, 900.0):
         w = rpm * math.pi / 30
         both_ways = 0.5 * (fit.law.running_torque(w) - fit.law.running_torque(-w))  # the asymmetry cancels

@@ -103,7 +103,8 @@ def _figures(setup: str) -> dict:
 
     figures = {
         "locked_wave_generator": {"loop": locked_plots.plot_loop, "time": locked_plots.plot_time},
-        "driven_wave_generator": {"deviation": driven_plots.plot_deviation, "time": driven_plots.plot_driven_time},
+        "driven_wave_generator": {"deviation": driven_plots.plot_deviation, "time": driven_plots.plot_driven_time,
+                                  "running_torque": driven_plots.plot_running_torque},
     }
     return figures[setup]
 
@@ -123,13 +124,17 @@ def write_outputs(run, out_dir: Path, figures: bool = True) -> dict[str, str]:
     Returns
     -------
     dict
-        ``result`` and ``KIND_figure`` → the path written.
+        ``result`` and ``KIND_figure`` → the path written (a kind with nothing to draw for
+        this run is left out).
     """
     out_dir = Path(out_dir)
     paths = {"result": str(run.save(out_dir / f"{run.scenario.name}.h5"))}
     if figures:
         for kind, draw in _figures(run.result.setup).items():
+            figure = draw(run)
+            if figure is None:  # a figure this run has nothing for (a sweep's, on another profile)
+                continue
             path = out_dir / f"{run.scenario.name}_{kind}.png"
-            save_figure(draw(run), path)
+            save_figure(figure, path)
             paths[f"{kind}_figure"] = str(path)
     return paths

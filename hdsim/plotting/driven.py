@@ -95,3 +95,32 @@ def plot_driven_time(run, sample: int = 0):
         axis.grid(alpha=0.3)
     axes[0].set_title(f"{run.model.name}: {run.scenario.name}")
     return fig
+
+
+def plot_running_torque(run, sample: int = 0):
+    """No-load running torque against WG speed of a sweep (``running_torque_{rpm}rpm_mNm`` metrics),
+    with the unit's catalog value at 2000 rpm; None for a run without a sweep.
+
+    A measured sweep's plateau means (`hdsim fit` on a running-torque file) compare with it.
+    """
+    from hdsim.model.input_friction import catalog_values
+
+    points = sorted((float(name[len("running_torque_"):-len("rpm_mNm")]), float(np.atleast_1d(value)[sample]))
+                    for name, value in run.metrics.items()
+                    if name.startswith("running_torque_") and name.endswith("rpm_mNm"))
+    if not points:
+        return None
+    fig = Figure(figsize=(6, 4))
+    ax = fig.subplots()
+    speeds, torques = zip(*points)
+    ax.plot(speeds, torques, "o-", label=f"simulated, {run.model.name}")
+    catalog = catalog_values(run.model)
+    derived = catalog.get("status", "").startswith("derived")
+    ax.plot([2000.0], [1e3 * catalog["running_torque_2000rpm"]], "s", mfc="none", color="C3",
+            label="catalog, 2000 rpm" + (f" ({catalog['status']})" if derived else ""))
+    ax.set_xlabel("wave-generator speed [rpm]")
+    ax.set_ylabel("no-load running torque on the input [mN·m]")
+    ax.set_xlim(left=0.0)
+    ax.set_ylim(bottom=0.0)
+    ax.legend(fontsize=8)
+    return fig
