@@ -269,3 +269,11 @@ def test_a_list_key_takes_a_toml_array_on_the_command_line():
     assert sc.with_updates({"input.speeds_rpm": "[500, 2000.5]"}).data["input"]["speeds_rpm"] == [500, 2000.5]
     with pytest.raises(InputError, match="must be list"):
         sc.with_updates({"input.speeds_rpm": "500 rpm"})
+
+
+def test_a_running_fit_file_is_not_taken_for_a_drive(tmp_path):
+    from hdsim.identification.fit import load_fitted
+
+    path = fit_running(law_record(FULL, fs=300.0), ["friction"]).save(tmp_path / "sweep.fit.toml")
+    with pytest.raises(InputError, match="paste its \\[input_friction\\] table"):
+        load_fitted(path)

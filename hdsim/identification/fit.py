@@ -240,6 +240,9 @@ def load_fitted(path) -> HarmonicDrive:
 
     path = Path(path)
     doc = read_toml(path, "fit")
+    if doc.get("format") == "hdsim-running-fit-1":
+        raise InputError(f"{path}: a running-torque fit holds the friction law of the wave-generator shaft, not a "
+                         "drive: paste its [input_friction] table into a driven scenario")
     if doc.get("format") != "hdsim-fit-1":
         raise InputError(f"{path}: not an hdsim fit file (format = 'hdsim-fit-1' expected)")
     # the file may have been edited by hand: check its shape before using it
