@@ -23,6 +23,7 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
+sys.path.insert(0, str(HERE.parent))  # this checkout's hdsim, whatever an editable install points at
 
 FAMILIES = ("hardening", "backlash", "friction", "damping")
 #: group name -> list of (hidden families, baseline families)

@@ -32,6 +32,7 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))  # truth_running lives with the tests
+sys.path.insert(0, str(HERE.parent))  # this checkout's hdsim, whatever an editable install points at
 
 #: group name -> hidden families (the baseline is always the base model: no family)
 GROUPS = {
