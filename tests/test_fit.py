@@ -432,3 +432,14 @@ def test_a_trial_of_barely_hardening_far_beyond_the_structure_stays_a_valid_mode
         updates, _ = split_stiffness(model, K0, ratio)
         assert 1e-3 <= float(updates["calibration.kappa_mesh"]) <= 1e3
         model.with_updates(updates)  # no InputError
+
+
+@pytest.mark.parametrize("K0, ratio", [(1e300, 2.0), (3e4, 1e4), (np.inf, 1.5)])
+def test_an_optimiser_trial_far_out_is_still_a_valid_model(K0, ratio):
+    """K0 → ∞ or K∞/K0 beyond the cap asked for an infinite or negative modulus ("E must be a
+    positive finite number, got nan Pa" ended a kinematic-error diagnosis under a varying load)."""
+    from hdsim.model.catalog import load_unit
+
+    model = load_unit()
+    updates, _ = split_stiffness(model, np.array([K0]), np.array([ratio]))
+    model.with_updates(updates)  # no InputError

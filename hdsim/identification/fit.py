@@ -30,6 +30,9 @@ from hdsim.io.measurement import Measurement
 from hdsim.model import effects as fx
 from hdsim.model.drive import SLOTS, HarmonicDrive
 
+#: Newton iterations per sample when a fitted model is evaluated for its result
+RESULT_NEWTON_ITERATIONS = 400
+
 __all__ = ["FitResult", "fit", "parse_effects", "build_model", "load_fitted", "result_of",
            "Evaluator", "FitProblem", "make_problem", "fit_many", "bic", "effective_n"]
 
@@ -295,6 +298,10 @@ def result_of(ev: Evaluator, prob: FitProblem, unit: str = "") -> FitResult:
         if prob.names else {}
     model = prob.model.with_updates(updates) if updates else prob.model
     twist = ev.twist(model)
+    if not np.all(np.isfinite(twist)):
+        # a very stiff friction law (σ ~ 1e8) can need more bisections of its bracket than the
+        # optimiser's trials are given; the result is evaluated once, so it may take them
+        twist = ev.twist(model, max_iter=RESULT_NEWTON_ITERATIONS)
     if not np.all(np.isfinite(twist)):
         raise SolverError(f"the model {', '.join(prob.names) or 'structure'} cannot be evaluated on "
                           f"this record: {prob.message or 'the torque balance has no solution'}")

@@ -95,7 +95,7 @@ def _trial_points(p: FitProblem) -> np.ndarray:
             step = -np.linalg.solve(A + lam * np.diag(D), g)
         except np.linalg.LinAlgError:
             step = -g / (D * (1 + lam))
-        step = np.clip(step, -5.0, 5.0)
+        step = np.clip(np.where(np.isfinite(step), step, 0.0), -5.0, 5.0)
         out.append(p.u + step)
     return np.array(out)
 
@@ -110,6 +110,8 @@ def _update(p: FitProblem, r_rows: np.ndarray, has_base: int, steps, trials, tol
             p.done, p.message = True, "failed: the model cannot be evaluated at the start values"
             return
         p.J = ((r_rows[1:1 + k] - r0) / steps[:, None]).T if k else np.zeros((r0.size, 0))
+        # a column the evaluator could not solve carries no slope (a NaN would make every step NaN)
+        p.J = np.where(np.isfinite(p.J), p.J, 0.0)
         if k == 0:
             p.done, p.message = True, "nothing to fit: the linear part is solved exactly"
         return

@@ -42,6 +42,8 @@ __all__ = ["K0_NAME", "Evaluator", "FitProblem", "fit_context", "make_problem", 
 K0_NAME = "stiffness.K0"
 #: engagement ratio used when the structure must be stiffened to reach K∞
 E_INF_CAP = 100.0
+#: the stiffened structure's modulus is at most this multiple of the nominal one
+E_MAX_FACTOR = 1e6
 
 
 # --------------------------------------------------------------------------- data signatures
@@ -136,16 +138,22 @@ def split_stiffness(model: HarmonicDrive, K0, ratio=1.0, e_cap: float = E_INF_CA
         e_a = np.where(hard, kappa_a * cm0 / (Cinf - cs0), 1.0)
     ok = (kappa_a > 1e-3) & (~hard | ((Cinf > cs0) & (e_a >= 1.0) & (e_a <= e_cap)))
     # stiffen the structure: e = e_cap (or the structure takes half of C0 without hardening)
-    share = np.where(hard, (1.0 - 1.0 / ratio) / (1.0 - 1.0 / e_cap), 0.5)
+    share = np.clip(np.where(hard, (1.0 - 1.0 / ratio) / (1.0 - 1.0 / e_cap), 0.5), 0.0, 1.0 - 1e-9)
     cs_target = C0 * (1.0 - share)
-    E_b = E0 * cs0 / cs_target
+    # an optimiser's far trial (K0 → ∞, K∞/K0 beyond the cap) would ask for an infinite or
+    # negative modulus; it is held at a finite one, a valid model whose cost sends it back
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        E_b = np.clip(np.nan_to_num(E0 * cs0 / cs_target, nan=E0, posinf=E_MAX_FACTOR * E0), E0,
+                      E_MAX_FACTOR * E0)
     chain_b = compliance_chain(replace(g, E=np.where(ok, E0, E_b)), wg, 1.0)
     cm_b = np.asarray(chain_b.mesh_zone, dtype=float)
     kappa_b = share * C0 / cm_b
     # an extreme trial (K∞ barely above K0 on the stiffened branch) may ask for a κ outside its
     # physical range; the trial is then held at the bound instead of failing the whole batch
     lo, hi = Calibration.param_meta()["kappa_mesh"]["bounds"]
-    out = {"calibration.kappa_mesh": np.clip(np.where(ok, kappa_a, kappa_b), lo, hi)}
+    with np.errstate(invalid="ignore"):
+        kappa = np.nan_to_num(np.where(ok, kappa_a, kappa_b), nan=hi, posinf=hi, neginf=lo)
+    out = {"calibration.kappa_mesh": np.clip(kappa, lo, hi)}
     if not np.all(ok):
         out["flexspline.E"] = np.where(ok, E0, E_b)
     e = np.where(ok, e_a, np.where(hard, e_cap, 1.0))
@@ -229,10 +237,11 @@ class Evaluator:
         extra = model.kinematic_error.linear_basis(self.wg, self.ideal)
         return ones if extra is None else np.hstack([ones, extra])
 
-    def twist(self, models) -> np.ndarray:
+    def twist(self, models, max_iter: int = 60) -> np.ndarray:
         """(M, n) quasi-static twist of the stacked models; NaN rows where the balance
-        could not be solved (the optimiser treats them as failed trials)."""
-        return locked_twist(models, self.t, self.T, grid=self.grid, on_failure="nan")
+        could not be solved within ``max_iter`` Newton iterations per sample (the optimiser
+        treats them as failed trials)."""
+        return locked_twist(models, self.t, self.T, grid=self.grid, on_failure="nan", max_iter=max_iter)
 
 
 # --------------------------------------------------------------------------- problems
@@ -304,7 +313,8 @@ def make_problem(model: HarmonicDrive, meas: Measurement, ev: Evaluator, rows=No
             names.append(f"{family}.{fp.name}")
             transforms.append(Transform(fp.lower, fp.upper))
             values.append(fp.start)
-    values = [start.get(n, v) for n, v in zip(names, values)]
+    # a start value that is not finite (from a fit that failed) falls back to the data's
+    values = [start[n] if np.isfinite(start.get(n, np.nan)) else v for n, v in zip(names, values)]
     u = np.array([tr.to_internal(v) for tr, v in zip(transforms, values)], dtype=float)
     rows = np.ones(len(meas), dtype=bool) if rows is None else np.asarray(rows, dtype=bool)
     return FitProblem(model=model, names=names, transforms=transforms, rows=rows, u=u,
