@@ -323,7 +323,9 @@ def diagnose_running(meas: Measurement | SweepRecord, effects=None, *, families=
         for other in passing[1:]:
             if abs(other.share - best.share) < AMBIGUOUS_SHARE:
                 pair = frozenset({best.family, other.family})
-                ambiguous.append({"families": sorted(pair), "measurement": SEPARATING.get(pair, "")})
+                entry = {"families": sorted(pair), "measurement": SEPARATING.get(pair, "")}
+                if entry not in ambiguous:  # the same pair may come up again in a later round
+                    ambiguous.append(entry)
         step.added = best.family
         added.append(best.family)
         effects = step.effects + [best.family]
