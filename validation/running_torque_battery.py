@@ -21,18 +21,20 @@ battery. Results go to ``validation/results/running_torque_battery.json`` (atomi
 from __future__ import annotations
 
 import argparse
+import functools
 import json
-import os
 import sys
 import tempfile
 import time
 import traceback
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))  # truth_running lives with the tests
 sys.path.insert(0, str(HERE.parent))  # this checkout's hdsim, whatever an editable install points at
+sys.path.insert(0, str(HERE))
+
+from battery_common import run_in_processes, write_json_atomic  # noqa: E402
 
 #: group name -> hidden families (the baseline is always the base model: no family)
 GROUPS = {
@@ -189,41 +191,17 @@ def summarise(rows: list[dict]) -> list[str]:
 
 def run_cases(cases: list[tuple[str, int]], workers: int = 1, progress: bool = False, **overrides) -> list[dict]:
     """Run ``(group, seed)`` cases, in processes when ``workers > 1``; rows in case order."""
-    if workers <= 1:
-        return [run_case(g, s, **overrides) for g, s in cases]
-    rows = []
-    with ProcessPoolExecutor(workers) as pool:
-        futures = [pool.submit(run_case, g, s, **overrides) for g, s in cases]
-        if progress:
-            from tqdm import tqdm
+    def failed(g, s, error):
+        return {"group": g, "seed": s, "hidden": list(GROUPS[g]), "added": [], "ranking": [], "scores": [],
+                "baseline_rmse_Nm": None, "final_rmse_Nm": None, "outcome": None, "draws": None,
+                "seconds": None, "error": error}
 
-            futures_iter = tqdm(futures, desc="running-torque battery", unit="case")
-        else:
-            futures_iter = futures
-        for (g, s), future in zip(cases, futures_iter):
-            try:
-                rows.append(future.result())
-            except Exception as exc:  # a worker died: still a failed case, not a crash
-                rows.append({"group": g, "seed": s, "hidden": list(GROUPS[g]), "added": [], "ranking": [],
-                             "scores": [], "baseline_rmse_Nm": None, "final_rmse_Nm": None,
-                             "outcome": None, "draws": None, "seconds": None,
-                             "error": f"worker failed: {type(exc).__name__}: {exc}"})
-    return rows
+    return run_in_processes(functools.partial(_case, **overrides), cases, workers, "running-torque battery",
+                            failed, progress)
 
 
-def write_json_atomic(path: Path, obj) -> None:
-    """Write ``obj`` as JSON to a temporary file beside ``path``, then ``os.replace`` it."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
-            json.dump(obj, handle, indent=1, default=str)
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+def _case(group, seed, **overrides):
+    return run_case(group, seed, **overrides)
 
 
 def main(argv=None) -> int:

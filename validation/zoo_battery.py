@@ -42,21 +42,21 @@ seeds per group. Results go to ``validation/results/zoo_battery.json`` (atomical
 from __future__ import annotations
 
 import argparse
+import functools
 import json
-import os
 import sys
 import tempfile
 import time
 import traceback
 import zlib
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 # this checkout's hdsim, whatever an editable install elsewhere points at; the zoo lives with the tests
-sys.path[:0] = [str(HERE.parent), str(HERE.parent / "tests")]
+sys.path[:0] = [str(HERE.parent), str(HERE.parent / "tests"), str(HERE)]
 
 import truth_zoo as tz  # noqa: E402
+from battery_common import run_in_processes, write_json_atomic  # noqa: E402
 
 OUT = HERE / "results" / "zoo_battery.json"
 TARGET_FIRST, TARGET_BOTH, TARGET_NOTHING, TARGET_SPURIOUS, MIN_SEEDS = 0.90, 0.90, 0.95, 0.05, 5
@@ -303,42 +303,13 @@ def leave_one_form_out(rows: list[dict], tuning: tuple) -> list[str]:
 
 def run_cases(cases: list[tuple[str, int]], workers: int = 1, max_rows: int | None = None) -> list[dict]:
     """Run ``(group, seed)`` cases, in processes when ``workers > 1``; rows in case order."""
-    try:
-        from tqdm import tqdm
-    except ImportError:  # progress is a nicety
-        tqdm = None
-    if workers <= 1:
-        it = tqdm(cases, desc="zoo battery", unit="case") if tqdm else cases
-        return [run_case(g, s, max_rows) for g, s in it]
-    rows = []
-    with ProcessPoolExecutor(workers) as pool:
-        futures = [pool.submit(run_case, g, s, max_rows) for g, s in cases]
-        it = tqdm(futures, desc="zoo battery", unit="case") if tqdm else futures
-        for (g, s), future in zip(cases, it):
-            try:
-                rows.append(future.result())
-            except Exception as exc:  # a worker died: still a failed case, not a crash
-                d = design(g, s)
-                rows.append({"group": g, "seed": s, "profile": d["profile"], "hidden": d["hidden"],
-                             "baseline": d["baseline"], "added": [], "ranking": [], "ambiguous": [],
-                             "outcome": None, "secondary": {}, "seconds": None,
-                             "error": f"worker failed: {type(exc).__name__}: {exc}"})
-    return rows
+    def failed(g, s, error):
+        d = design(g, s)
+        return {"group": g, "seed": s, "profile": d["profile"], "hidden": d["hidden"], "baseline": d["baseline"],
+                "added": [], "ranking": [], "ambiguous": [], "outcome": None, "secondary": {}, "seconds": None,
+                "error": error}
 
-
-def write_json_atomic(path: Path, obj) -> None:
-    """Write ``obj`` as JSON to a temporary file beside ``path``, then ``os.replace`` it."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
-            json.dump(obj, handle, indent=1, default=str)
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    return run_in_processes(functools.partial(run_case, max_rows=max_rows), cases, workers, "zoo battery", failed)
 
 
 def main(argv=None) -> int:

@@ -1,0 +1,61 @@
+"""What the validation batteries share: running cases in processes, and writing results.
+
+A case is a ``(group, seed)`` pair and a runner a picklable function of it that never
+raises; a worker that dies anyway still gives a row (``failed_row``), so a battery never
+crashes on one case. Results are written atomically (`hdsim.atomic.write_text_atomic`).
+"""
+
+from __future__ import annotations
+
+import json
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+
+def run_in_processes(run_case, cases, workers: int, description: str, failed_row, progress: bool = True) -> list:
+    """``[run_case(group, seed) for group, seed in cases]``, in ``workers`` processes when > 1.
+
+    Parameters
+    ----------
+    run_case : callable
+        ``run_case(group, seed) -> dict`` (picklable: a module-level function or a partial of one).
+    cases : list of tuple
+        ``(group, seed)`` pairs.
+    workers : int
+        Processes (1: in this process).
+    description : str
+        Label of the progress bar (tqdm, when installed).
+    failed_row : callable
+        ``failed_row(group, seed, error_text) -> dict``: the row of a case whose worker died.
+    progress : bool
+        Show a progress bar.
+
+    Returns
+    -------
+    list of dict
+        One row per case, in case order.
+    """
+    try:
+        from tqdm import tqdm
+    except ImportError:  # progress is a nicety
+        tqdm = None
+    show = (lambda items: tqdm(items, desc=description, unit="case")) if tqdm and progress else (lambda items: items)
+    if workers <= 1:
+        return [run_case(g, s) for g, s in show(cases)]
+    rows = []
+    with ProcessPoolExecutor(workers) as pool:
+        futures = [pool.submit(run_case, g, s) for g, s in cases]
+        for (g, s), future in zip(cases, show(futures)):
+            try:
+                rows.append(future.result())
+            except Exception as exc:  # a worker died: still a failed case, not a crash
+                rows.append(failed_row(g, s, f"worker failed: {type(exc).__name__}: {exc}"))
+    return rows
+
+
+def write_json_atomic(path: Path, obj) -> None:
+    """Write ``obj`` as indented JSON to ``path`` atomically (temporary file, then rename)."""
+    from hdsim.atomic import write_text_atomic
+
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    write_text_atomic(path, json.dumps(obj, indent=1, default=str))
