@@ -95,6 +95,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+from truth_files import to_csv_text, write_csv  # noqa: F401  (re-exported: one writer of the file contract)
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 from scipy.special import i0, i1
@@ -666,20 +667,6 @@ def make_ke_data(
 # --------------------------------------------------------------------------- files
 
 
-def to_csv_text(columns: dict, meta: dict) -> str:
-    """The contract's CSV text: ``# key: value`` lines, a header, exact float rows."""
-    lines = [f"# {key}: {value}" for key, value in meta.items()]
-    lines.append(",".join(columns))
-    table = np.column_stack([np.asarray(v, dtype=float) for v in columns.values()]).tolist()
-    lines += [",".join(map(repr, row)) for row in table]  # repr: shortest exact text
-    return "\n".join(lines) + "\n"
-
-
-def write_csv(path, columns: dict, meta: dict) -> Path:
-    """Write :func:`to_csv_text` to ``path``; returns the path."""
-    path = Path(path)
-    path.write_text(to_csv_text(columns, meta), encoding="utf-8")
-    return path
 
 
 def write_hdf5(path, columns: dict, meta: dict) -> Path:

@@ -86,6 +86,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+from truth_files import to_csv_text, write_csv  # noqa: F401  (re-exported: one writer of the file contract)
 from scipy.special import i0, i1
 
 FAMILIES = ("friction", "damping", "ripple")
@@ -484,19 +485,6 @@ def make_running_data(hidden=(), seed: int = 0, **overrides) -> tuple[dict, dict
 # --------------------------------------------------------------------------- files
 
 
-def to_csv_text(columns: dict, meta: dict) -> str:
-    """The file contract's text: ``# key: value`` lines, a header row, exact float rows."""
-    lines = [f"# {k}: {v}" for k, v in meta.items()] + [",".join(columns)]
-    table = np.column_stack([np.asarray(v, dtype=float) for v in columns.values()])
-    lines += [",".join(repr(float(x)) for x in row) for row in table]  # repr: shortest exact text
-    return "\n".join(lines) + "\n"
-
-
-def write_csv(path, columns: dict, meta: dict) -> Path:
-    """Write :func:`to_csv_text` to ``path``; returns the path."""
-    path = Path(path)
-    path.write_text(to_csv_text(columns, meta), encoding="utf-8")
-    return path
 
 
 def read_csv(path) -> tuple[dict, dict]:

@@ -100,9 +100,9 @@ the others present (data with and without a family differ only by it).
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
+from truth_files import to_csv_text, write_csv  # noqa: F401  (re-exported: one writer of the file contract)
 
 import truth_zoo_forms as zf
 
@@ -530,16 +530,3 @@ def make_case(hidden: dict, baseline: dict, profile: str, seed: int, **overrides
 # --------------------------------------------------------------------------- files
 
 
-def to_csv_text(columns: dict, meta: dict) -> str:
-    """The file contract's text: ``# key: value`` lines, a header row, exact float rows."""
-    lines = [f"# {k}: {v}" for k, v in meta.items()] + [",".join(columns)]
-    table = np.column_stack([np.asarray(v, dtype=float) for v in columns.values()])
-    lines += [",".join(repr(float(x)) for x in row) for row in table]  # repr: shortest exact text
-    return "\n".join(lines) + "\n"
-
-
-def write_csv(path, columns: dict, meta: dict) -> Path:
-    """Write :func:`to_csv_text` to ``path``; returns the path."""
-    path = Path(path)
-    path.write_text(to_csv_text(columns, meta), encoding="utf-8")
-    return path
