@@ -35,6 +35,7 @@ other are reported as ``ambiguous``, with the measurement that would separate th
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import dataclass, field
@@ -108,6 +109,9 @@ class RunningStep:
     folds: list
     candidates: list = field(default_factory=list)
     added: str | None = None
+    #: held-out RSS of this model with its families widened: the proxy test of every candidate of the
+    #: round compares with it, so it is computed once (``False``: not yet)
+    widened_folds: list | None | bool = False
 
 
 @dataclass
@@ -136,8 +140,10 @@ class RunningDiagnosis:
     def ranking(self) -> list:
         return sorted(self.steps[0].candidates, key=lambda c: c.score)
 
-    @property
+    @functools.cached_property
     def whiteness(self) -> dict:
+        """Whiteness and noise-floor verdict of the final residual (read by ``success``, the verdict
+        and the JSON; computed once)."""
         return _explained(self.final.fit)
 
     @property
@@ -239,7 +245,9 @@ def _proxy_gains(rec, current: RunningStep, family: str, folds) -> list[float] |
     (None when the model has no family to widen)."""
     if not current.effects:
         return None
-    widened = _holdout_rss(rec, current.effects, folds, widened=current.effects)
+    if current.widened_folds is False:
+        current.widened_folds = _holdout_rss(rec, current.effects, folds, widened=current.effects)
+    widened = current.widened_folds
     both = _holdout_rss(rec, current.effects + [family], folds, widened=current.effects)
     return _gains(both, widened) or [0.0]
 
