@@ -9,8 +9,10 @@ Procedure
    revolutions, so that each fold holds both load directions). A fold fit minimises the residual on its own rows only; the other
    fold's rows are its hold-out.
 2. For every family not yet in the model, add its effect (the family's default effect, or the one named in ``candidates``)
-   and refit all rows and both folds, starting from the baseline's values. All these fits
-   run in lockstep in one batched pass per iteration (`hdsim.identification.fit.fit_many`).
+   and refit all rows and both folds, each from the baseline's values and afresh (the
+   lower optimum counts). All the fits of a round run in lockstep in one batched pass per
+   iteration (`hdsim.identification.fit.fit_many`): a pass costs about the same whatever
+   it holds, so a round costs about as many passes as its slowest fit.
 3. Score each candidate by the change of an information criterion, BIC computed with an
    *effective* sample size::
 
@@ -57,8 +59,9 @@ from hdsim.identification.fit import (Evaluator, FitResult, build_model, effecti
                                       parse_effects, result_of)
 from hdsim.model import effects as fx
 from hdsim.io.measurement import Measurement
-from hdsim.io.data_checks import loading_rates, turning_points
 from hdsim.model.drive import SLOTS
+from hdsim.identification.confidence import block_labels, block_sums, comparison_table, resample_counts
+from hdsim.identification.folds import blocks, folds, one_loading_rate
 from hdsim.identification.residuals import findings, whiteness
 
 __all__ = ["Diagnosis", "diagnose", "folds", "SEPARATING", "SCORE_THRESHOLD",
@@ -72,6 +75,15 @@ HOLDOUT_GAIN = 0.05
 MIN_GAIN = 0.05
 #: near-tie: runner-up within max(10, this fraction of |best score|)
 TIE_FRACTION = 0.10
+#: a hold-out gain this large on *both* folds stands for the score: a model far from the
+#: record leaves a strongly correlated residual whose n_eff makes the BIC timid (the
+#: kinematic error under a varying load halves the rms at a score of +7)
+STRONG_HOLDOUT_GAIN = 0.10
+#: at one loading rate, damping and friction are told apart by loop shape only when their
+#: scores differ by more than max(20, this fraction of |best score|)
+SHAPE_MARGIN = 0.25
+#: the families whose difference is the loading rate
+RATE_PAIR = frozenset({"damping", "friction"})
 
 #: the measurement that separates two families explaining the residual about equally well
 SEPARATING = {
@@ -104,73 +116,6 @@ def _separating(a: str, b: str) -> str:
         return ("a kinematic-error test over several output revolutions at constant load: the "
                 "kinematic error repeats with the wave-generator angle, the other does not")
     return SEPARATING.get(frozenset({a, b}), "a test at another loading rate and amplitude")
-
-
-# --------------------------------------------------------------------------- folds
-
-
-def _legs(meas: Measurement):
-    """(start, stop) index pairs of monotone torque legs and their mean |dT/dt|.
-
-    The folds keep their own rule, a moving average over n/200 samples and a dead band of
-    5 % of the swing: the battery's hold-out rates were measured with it (the noise-set
-    band of `hdsim.io.data_checks.torque_legs` moved one backlash case of five).
-    """
-    T = np.asarray(meas.torque, dtype=float)
-    k = max(int(T.size // 200), 1)
-    smooth = np.convolve(T, np.ones(2 * k + 1) / (2 * k + 1), mode="same")
-    turns = turning_points(smooth, 0.05 * max(float(np.ptp(smooth)), 1e-12))
-    legs = [(a, b) for a, b in zip(turns[:-1], turns[1:]) if b - a > 2]
-    return legs, loading_rates(meas.time, smooth, turns)  # one rate per leg (the same b - a > 2 rule)
-
-
-def folds(meas: Measurement) -> tuple[list[np.ndarray], str]:
-    """Two disjoint row masks that cover the record, and how they were chosen.
-
-    By loading rate when the legs of the torque profile have rates differing by more
-    than 1.5× (the slow and the fast legs); otherwise the first and the second half of
-    the legs (or of the time, when there are fewer than two legs).
-    """
-    n = len(meas)
-    if meas.test == "kinematic_error":
-        # both folds need both load directions (else the twist under load is not
-        # identified): alternate blocks of ten wave-generator revolutions
-        wg = np.asarray(meas.wg_angle, dtype=float)
-        travel = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(wg)))])
-        block = (travel // (10 * 2 * np.pi)).astype(int)
-        if block.max() >= 3:
-            masks = [block % 2 == 0, block % 2 == 1]
-            return masks, "alternate blocks of ten wave-generator revolutions"
-    legs, rates = _legs(meas)
-    masks = [np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)]
-    if len(legs) >= 2 and np.min(rates) > 0 and np.max(rates) / np.min(rates) > 1.5:
-        cut = math.sqrt(np.min(rates) * np.max(rates))
-        for (a, b), rate in zip(legs, rates):
-            masks[int(rate > cut)][a:b] = True
-        how = "loading rate"
-    elif len(legs) >= 2:
-        half = len(legs) // 2
-        for i, (a, b) in enumerate(legs):
-            masks[int(i >= half)][a:b] = True
-        how = "first and second half of the loading legs"
-    else:
-        masks[0][: n // 2] = True
-        masks[1][n // 2:] = True
-        how = "first and second half of the time"
-    # rows outside any leg go to the nearer fold in time
-    rest = ~(masks[0] | masks[1])
-    if np.any(rest):
-        idx = np.flatnonzero(rest)
-        owner0 = np.flatnonzero(masks[0])
-        owner1 = np.flatnonzero(masks[1])
-        for i in idx:
-            d0 = np.min(np.abs(owner0 - i)) if owner0.size else np.inf
-            d1 = np.min(np.abs(owner1 - i)) if owner1.size else np.inf
-            masks[int(d1 < d0)][i] = True
-    if min(m.sum() for m in masks) < 10:
-        masks = [np.arange(n) < n // 2, np.arange(n) >= n // 2]
-        how = "first and second half of the time"
-    return masks, how
 
 
 # --------------------------------------------------------------------------- results
@@ -237,6 +182,7 @@ class Diagnosis:
     findings_after: list
     seconds: float
     passes: int
+    confidence: dict = field(default_factory=dict)
 
     @property
     def baseline(self) -> Step:
@@ -304,6 +250,7 @@ class Diagnosis:
             "success": self.success,
             "verdict": self.verdict(),
             "findings": {"baseline": self.findings_before, "final": self.findings_after},
+            "confidence": self.confidence,
             "seconds": round(self.seconds, 3),
             "passes": self.passes,
         }
@@ -324,7 +271,7 @@ def _results(ev, probs, unit):
 
 
 def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candidates: dict | None = None,
-             max_rounds: int | None = None, max_steps: int = 4000, log=None) -> Diagnosis:
+             max_rounds: int | None = None, max_steps: int | None = None, log=None) -> Diagnosis:
     """Find the effect families a measurement needs beyond ``effects``.
 
     Parameters
@@ -342,8 +289,9 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
         (default: the family's default effect, `hdsim.model.effects.default_effect`).
     max_rounds : int, optional
         Stop after this many additions.
-    max_steps : int
-        Quasi-static steps at most per evaluation.
+    max_steps : int, optional
+        Quasi-static steps at most per evaluation; default
+        `hdsim.identification.problem.STEP_BUDGET`.
     log : callable, optional
         Progress messages (e.g. ``print`` to stderr).
 
@@ -370,6 +318,7 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
             raise InputError(f"a {meas.test} test cannot show the {f} family")
     ev = Evaluator(meas, max_steps=max_steps)
     masks, rule = folds(meas)
+    one_rate = meas.test == "stiffness" and one_loading_rate(meas)
     passes = 0
     say = log or (lambda *_: None)
 
@@ -391,9 +340,12 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
             break
         if whiteness(step.fit.residual)["white"]:
             break
-        # phase A: every candidate on all rows, from the baseline's values and afresh
+        # one lockstep for the round: every candidate on all rows and on each hold-out
+        # fold, each from the baseline's values and afresh. A pass costs about the same
+        # whatever it holds (the evaluator's cost is its loop over the samples), so the
+        # fold fits ride along instead of waiting for the all-rows optimum
         cands = []
-        phase_a = []
+        batch = []
         failed = []  # candidates that could not be built: rejected with the reason, never fatal
         for family in todo:
             trial = dict(current)
@@ -402,30 +354,19 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
                 cmodel = build_model(unit, trial, meas)
                 warm = make_problem(cmodel, meas, ev, start=dict(step.fit.internal), label=f"{family}:all")
                 cold = make_problem(cmodel, meas, ev, start=None, label=f"{family}:all-fresh")
+                pairs = [(make_problem(cmodel, meas, ev, rows=mask, start=dict(step.fold_fits[i].internal),
+                                       label=f"{family}:fold{i}"),
+                          make_problem(cmodel, meas, ev, rows=mask, start=None, label=f"{family}:fold{i}-fresh"))
+                         for i, mask in enumerate(masks)]
             except (InputError, SolverError) as exc:
                 failed.append(Candidate.failed(family, stand_in[family], str(exc)))
                 continue
-            cands.append([family, cmodel, warm, cold])
-            phase_a += [warm, cold]
-        passes += fit_many(ev, phase_a)
-        # phase B: the hold-out folds, from the baseline's fold values and from the
-        # candidate's all-rows optimum (whichever ends lower)
-        phase_b = []
-        for entry in cands:
-            family, cmodel, warm, cold = entry
-            best_all = warm if warm.cost <= cold.cost else cold
-            optimum = dict(zip(best_all.names, (float(v[0]) for v in best_all.phys(best_all.u).values())))
-            pairs = []
-            for i, mask in enumerate(masks):
-                a = make_problem(cmodel, meas, ev, rows=mask, start=dict(step.fold_fits[i].internal),
-                                 label=f"{family}:fold{i}")
-                b = make_problem(cmodel, meas, ev, rows=mask, start=optimum, label=f"{family}:fold{i}-opt")
-                pairs.append((a, b))
-                phase_b += [a, b]
-            entry.append((best_all, pairs))
-        passes += fit_many(ev, phase_b)
+            cands.append((family, warm, cold, pairs))
+            batch += [warm, cold] + [p for pair in pairs for p in pair]
+        passes += fit_many(ev, batch)
         scored = list(failed)
-        for family, cmodel, warm, cold, (best_all, pairs) in cands:
+        for family, warm, cold, pairs in cands:
+            best_all = warm if warm.cost <= cold.cost else cold
             probs = [best_all] + [a if a.cost <= b.cost else b for a, b in pairs]
             try:
                 res = _results(ev, probs, unit_name)
@@ -439,6 +380,14 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
         best = ranked[0]
         if not best.accepted:
             break
+        pair = _rate_ambiguity(best, scored, current) if one_rate else None
+        if pair is not None:
+            # one loading rate cannot say whether this loss grows with the rate: report
+            # the pair and the measurement that separates it, add neither
+            by_family = {c.family: c.score for c in scored}
+            ambiguous.append({"families": pair, "scores": [by_family.get(f) for f in pair],
+                              "round": rounds + 1, "measurement": _separating(*pair), "added": False})
+            break
         if len(ranked) > 1:
             second = ranked[1]
             tie = max(10.0, TIE_FRACTION * abs(best.score))
@@ -446,7 +395,7 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
                 ambiguous.append({"families": [best.family, second.family],
                                   "scores": [best.score, second.score],
                                   "round": rounds + 1,
-                                  "measurement": _separating(best.family, second.family)})
+                                  "measurement": _separating(best.family, second.family), "added": True})
         step.added = best.family
         added.append(best.family)
         current[best.family] = best.effect
@@ -459,7 +408,104 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
     return Diagnosis(measurement=meas, steps=steps, added=added, ambiguous=ambiguous, fold_rule=rule,
                      whiteness=w, findings_before=findings_before,
                      findings_after=findings(meas, step.fit.residual),
-                     seconds=time.perf_counter() - t0, passes=passes)
+                     seconds=time.perf_counter() - t0, passes=passes,
+                     confidence=_confidence(meas, steps, masks, one_rate))
+
+
+def _confidence(meas: Measurement, steps: list, masks: list, one_rate: bool) -> dict:
+    """Inclusion probabilities and comparison tables by round (`hdsim.identification.confidence`)."""
+    starts, block_rule = blocks(meas)
+    n = len(meas)
+    labels = block_labels(n, starts)
+    B = int(labels.max()) + 1
+    counts = resample_counts(B) if B >= 2 else None
+    fold_of_row = masks[1].astype(int)
+    n_star = counts @ np.bincount(labels, minlength=B) if counts is not None else None
+
+    def sums(fit, fold_fits):
+        holdout = np.where(masks[0], fold_fits[1].residual, fold_fits[0].residual)
+        return block_sums(labels, B, fit.residual, holdout, fold_of_row), holdout
+
+    out_rounds, inclusion = [], {}
+    for k, step in enumerate(steps):
+        cands = [c for c in step.candidates if c.fit is not None and len(c.fold_fits) == 2]
+        if not cands:
+            continue
+        base, base_holdout = sums(step.fit, step.fold_fits)
+        holdouts, probabilities = [base_holdout], {}
+        scores, ok = [], []
+        for c in cands:
+            cs, holdout = sums(c.fit, c.fold_fits)
+            holdouts.append(holdout)
+            if counts is None:
+                continue
+            ratio = lambda a, b: np.maximum(counts @ a, 1e-300) / np.maximum(counts @ b, 1e-300)  # noqa: E731
+            n_eff = np.maximum(n_star * c.n_eff / n, 2.0)
+            score = n_eff * np.log(ratio(cs.fit, base.fit)) + (c.fit.n_params - step.fit.n_params) * np.log(n_eff)
+            fold_min = np.minimum(*(1.0 - np.sqrt(ratio(cs.holdout_by_fold[i], base.holdout_by_fold[i]))
+                                    for i in (0, 1)))
+            parts = _rule(score, fold_min, 1.0 - np.sqrt(ratio(cs.holdout, base.holdout)),
+                          1.0 - np.sqrt(ratio(cs.fit, base.fit)))
+            scores.append(score)
+            ok.append(parts[0] & parts[1] & parts[2])
+        if counts is not None:
+            S = np.where(np.array(ok), np.array(scores), np.inf)
+            best = np.argmin(S, axis=0)
+            chosen = np.isfinite(np.min(S, axis=0))
+            if one_rate:  # the same stop as the procedure's when one rate cannot separate the pair
+                fams = [c.family for c in cands]
+                for i, c in enumerate(cands):
+                    if c.family not in RATE_PAIR:
+                        continue
+                    other = next(iter(RATE_PAIR - {c.family}))
+                    mine = chosen & (best == i)
+                    if other in step.effects:
+                        chosen &= ~mine
+                    elif other in fams:
+                        j = fams.index(other)
+                        rival = np.array(scores)[j]
+                        close = (rival < SCORE_THRESHOLD) & (rival - S[i] < np.maximum(20.0, SHAPE_MARGIN * np.abs(S[i])))
+                        chosen &= ~(mine & close)
+            for i, c in enumerate(cands):
+                probabilities[c.family] = float(np.mean(chosen & (best == i)))
+            probabilities["none"] = float(1.0 - np.mean(chosen))
+            # a family's figure is from its last round as a candidate: the round that
+            # added it (it is no candidate afterwards), else the round the procedure stopped
+            inclusion.update({c.family: probabilities[c.family] for c in cands})
+        names = ["(nothing added)"] + [c.family for c in cands]
+        out_rounds.append({"round": k + 1, "probabilities": probabilities,
+                           "comparison": comparison_table(names, holdouts, labels)})
+    return {"blocks": B, "block_rule": block_rule, "resamples": 0 if counts is None else int(counts.shape[0]),
+            "inclusion": inclusion, "rounds": out_rounds}
+
+
+def _rule(score, fold_gain_min, pooled, gain):
+    """The three conditions of step 4 (numpy-vectorised, for the bootstrap of `_confidence`):
+    evidence (score, or a strong hold-out gain on both folds), hold-out gain, rms gain."""
+    return ((score < SCORE_THRESHOLD) | (fold_gain_min >= STRONG_HOLDOUT_GAIN),
+            pooled >= HOLDOUT_GAIN, gain >= MIN_GAIN)
+
+
+def _rate_ambiguity(best: Candidate, scored: list, current: dict):
+    """The damping–friction pair when one loading rate cannot separate them, else None.
+
+    Damping is an extra loss that grows with the rate, friction one that does not; at one
+    rate only the loop's shape tells them apart, and an imperfect friction form leaves a
+    shape that damping mimics. So: when the best candidate is one of the pair and the
+    other is already in the model, or is a candidate that also explains the residual
+    (score below the threshold) within ``SHAPE_MARGIN`` of the best, the record cannot
+    decide between them.
+    """
+    if best.family not in RATE_PAIR:
+        return None
+    other = next(iter(RATE_PAIR - {best.family}))
+    if other in current:
+        return sorted(RATE_PAIR)
+    rival = next((c for c in scored if c.family == other), None)
+    if rival is None or not rival.score < SCORE_THRESHOLD:
+        return None
+    margin = max(20.0, SHAPE_MARGIN * abs(best.score))
+    return sorted(RATE_PAIR) if rival.score - best.score < margin else None
 
 
 def _score(family: str, effect_id: str, res: list, base: Step) -> Candidate:
@@ -479,12 +525,14 @@ def _score(family: str, effect_id: str, res: list, base: Step) -> Candidate:
         pooled_b += out.sum() * rb**2
     pooled = 1.0 - math.sqrt(pooled_c / pooled_b) if pooled_b > 0 else 0.0
     gain = 1.0 - fit_all.rmse_rad / base.fit.rmse_rad if base.fit.rmse_rad > 0 else 0.0
+    fold_min = min(gains) if len(gains) == 2 else -math.inf
+    evidence, holds_out, lowers = _rule(score, fold_min, pooled, gain)
     reasons = []
-    if not score < SCORE_THRESHOLD:
+    if not evidence:
         reasons.append(f"score {score:.1f} not below {SCORE_THRESHOLD:g}")
-    if pooled < HOLDOUT_GAIN:
+    if not holds_out:
         reasons.append(f"hold-out error falls by only {100 * pooled:.1f} %")
-    if gain < MIN_GAIN:
+    if not lowers:
         reasons.append(f"rms error falls by only {100 * gain:.1f} %")
     ok = not reasons
     return Candidate(family=family, effect=effect_id, fit=fit_all, fold_fits=fold_fits,

@@ -297,7 +297,9 @@ def result_of(ev: Evaluator, prob: FitProblem, unit: str = "") -> FitResult:
     updates = {k: float(np.asarray(v).reshape(-1)[0]) for k, v in prob.updates(prob.u[None, :]).items()} \
         if prob.names else {}
     model = prob.model.with_updates(updates) if updates else prob.model
-    twist = ev.twist(model)
+    # the optimiser keeps the twist of the point it ended on: evaluating it again would
+    # cost a whole pass over the record per fit (a fifth of a diagnosis)
+    twist = prob.twist_at_u if prob.twist_at_u is not None else ev.twist(model)
     if not np.all(np.isfinite(twist)):
         # a very stiff friction law (σ ~ 1e8) can need more bisections of its bracket than the
         # optimiser's trials are given; the result is evaluated once, so it may take them
@@ -333,7 +335,7 @@ def result_of(ev: Evaluator, prob: FitProblem, unit: str = "") -> FitResult:
 
 
 def fit(meas: Measurement, effects=None, *, unit=None, rows=None, start: dict | None = None,
-        max_steps: int = 4000) -> FitResult:
+        max_steps: int | None = None) -> FitResult:
     """Fit the base model plus ``effects`` to a measurement.
 
     Parameters
@@ -349,8 +351,9 @@ def fit(meas: Measurement, effects=None, *, unit=None, rows=None, start: dict | 
         Fit only these rows (hold-out fits); the residual is reported everywhere.
     start : dict, optional
         Starting values by dotted name (others from the data).
-    max_steps : int
-        Quasi-static steps at most (longer records are stepped on a sub-grid).
+    max_steps : int, optional
+        Quasi-static steps at most (longer records are stepped on a sub-grid); default
+        `hdsim.identification.problem.STEP_BUDGET`.
 
     Returns
     -------

@@ -75,7 +75,7 @@ def fit_many(ev: Evaluator, problems: list[FitProblem], *, tol: float = 1e-3, lo
             block = twist[row:row + size]
             row += size
             r_rows, _, _ = residuals(ev, p, block)
-            _update(p, r_rows, kind == "start", steps, trials, tol)
+            _update(p, r_rows, kind == "start", steps, trials, tol, block)
         pending = [p for p in pending if not p.done]
         if log:
             log(f"pass {ticks}: {len(pending)} fits still running")
@@ -100,12 +100,13 @@ def _trial_points(p: FitProblem) -> np.ndarray:
     return np.array(out)
 
 
-def _update(p: FitProblem, r_rows: np.ndarray, has_base: int, steps, trials, tol) -> None:
+def _update(p: FitProblem, r_rows: np.ndarray, has_base: int, steps, trials, tol, twist) -> None:
     k = p.u.size
     if has_base:  # first tick: base point and Jacobian
         r0 = r_rows[0]
         p.r = r0
         p.cost = float(r0 @ r0)
+        p.twist_at_u = twist[0]
         if not np.isfinite(p.cost):
             p.done, p.message = True, "failed: the model cannot be evaluated at the start values"
             return
@@ -136,6 +137,7 @@ def _update(p: FitProblem, r_rows: np.ndarray, has_base: int, steps, trials, tol
         rel = (p.cost - costs[best]) / max(p.cost, 1e-300)
         p.u = trials[best]
         p.r = r_best
+        p.twist_at_u = twist[k + best]
         p.cost = float(costs[best])
         p.lam = max(p.lam * (0.1, 1.0, 10.0)[best] * 0.5, 1e-9)
         p.stalls = p.stalls + 1 if rel < tol else 0

@@ -201,6 +201,13 @@ def _k0_transform(model: HarmonicDrive) -> Transform:
 # --------------------------------------------------------------------------- evaluator
 
 
+#: quasi-static steps per pass at most on a long record (`hdsim.simulation.quasistatic.sample_grid`).
+#: Not lower: at 2500 the interpolated twist of a friction-and-hardening record is off by
+#: a visible part of the encoder noise, and a diagnosis of hidden hardening behind friction
+#: scored it −533 instead of −1825 and then added backlash for the rest
+STEP_BUDGET = 4000
+
+
 class Evaluator:
     """Model predictions and the linear (projected) part for one measurement.
 
@@ -209,7 +216,8 @@ class Evaluator:
     the measured load torque + kinematic error (the kinematic-error effect's linear basis).
     """
 
-    def __init__(self, meas: Measurement, max_steps: int = 4000):
+    def __init__(self, meas: Measurement, max_steps: int | None = None):
+        max_steps = STEP_BUDGET if max_steps is None else int(max_steps)
         self.meas = meas
         self.test = meas.test
         self.t = np.asarray(meas.time, dtype=float)
@@ -269,6 +277,8 @@ class FitProblem:
     stalls: int = 0
     message: str = ""
     extra: dict = field(default_factory=dict)
+    #: the twist (n,) at ``u``, kept from the pass that evaluated it (`result_of` reuses it)
+    twist_at_u: np.ndarray | None = None
 
     def phys(self, U: np.ndarray) -> dict[str, np.ndarray]:
         """Fitted coordinates (K0 and the effects' dotted free parameters) for rows of U."""
