@@ -106,6 +106,15 @@ def test_hidden_hardening_is_found_and_the_error_falls():
     assert j["final"]["rmse_rad"] <= 0.5 * j["baseline"]["rmse_rad"]
     assert j["final"]["effects"] == ["hardening", "friction"]
     assert j["table"][0]["rmse_rad"] == j["baseline"]["rmse_rad"]
+    # how sure: the hidden family survives resampling the record's blocks, and every
+    # round's probabilities (each family, or none) add up to one
+    conf = j["confidence"]
+    assert conf["inclusion"]["hardening"] > 0.9 and conf["resamples"] >= 100 and conf["blocks"] >= 6
+    for r in conf["rounds"]:
+        assert sum(r["probabilities"].values()) == pytest.approx(1.0)
+        assert r["comparison"][0]["elpd_diff"] == 0.0 and all(c["elpd_diff"] <= 0 for c in r["comparison"])
+    first = conf["rounds"][0]["comparison"]
+    assert first[0]["model"] == "hardening"
 
 
 def test_nothing_hidden_adds_nothing():

@@ -16,7 +16,7 @@ from hdsim.model.catalog import load_unit
 from hdsim.errors import InputError
 from hdsim.identification.fit import fit, load_fitted, parse_effects
 from hdsim.identification.problem import split_stiffness
-from hdsim.io.measurement import make_measurement
+from hdsim.io.measurement import load_measurement, make_measurement
 from hdsim.physics import friction as fr
 from hdsim.simulation.profiles import cosine_ramps
 from hdsim.simulation.quasistatic import (UnsupportedEffect, dynamic_locked_twist, locked_twist,
@@ -445,3 +445,29 @@ def test_an_optimiser_trial_far_out_is_still_a_valid_model(K0, ratio):
     model = load_unit()
     updates, _ = split_stiffness(model, np.array([K0]), np.array([ratio]))
     model.with_updates(updates)  # no InputError
+
+
+@pytest.mark.slow
+def test_a_second_friction_start_escapes_the_basin_of_a_reversing_ke_run(tmp_path):
+    """Independent truth (the zoo's LuGre friction holding the body's windup, a hard gap,
+    a brake load reversing with the output): from the data's start values alone the fit
+    of backlash + friction + kinematic error stops 44 arcsec rms from the record; the
+    friction's second start (half the largest torque, `Effect.other_starts`) reaches
+    4.7 arcsec (the noise is 0.33: LuGre's stiction is not Dahl's)."""
+    import truth_zoo as tz
+
+    cols, meta, _ = tz.make_case({"kinematic_error": "with_windup"}, {"backlash": "hard_gap"}, "one_rate", 0,
+                                 max_rows=6000)
+    path = tmp_path / "ke.csv"
+    tz.write_csv(path, cols, meta)
+    meas = load_measurement(path)
+    res = fit(meas, ["backlash", "friction", "kinematic_error"])
+    arcsec = np.degrees(1.0) * 3600.0
+    assert res.rmse_rad * arcsec < 8.0
+    alone = fx.DahlFriction.other_starts
+    try:
+        fx.DahlFriction.other_starts = lambda self, context: ()
+        stuck = fit(meas, ["backlash", "friction", "kinematic_error"])
+    finally:
+        fx.DahlFriction.other_starts = alone
+    assert stuck.rmse_rad > 3.0 * res.rmse_rad

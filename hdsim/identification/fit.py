@@ -25,7 +25,7 @@ import numpy as np
 
 from hdsim.errors import InputError, SolverError, unknown_name
 from hdsim.identification.optimizer import FittedRows, bic, effective_n, fit_many, residuals, uncertainty
-from hdsim.identification.problem import K0_NAME, Evaluator, FitProblem, make_problem
+from hdsim.identification.problem import K0_NAME, Evaluator, FitProblem, make_problem, other_starts
 from hdsim.io.measurement import Measurement
 from hdsim.model import effects as fx
 from hdsim.model.drive import SLOTS, HarmonicDrive
@@ -368,6 +368,9 @@ def fit(meas: Measurement, effects=None, *, unit=None, rows=None, start: dict | 
     chosen = effects if isinstance(effects, dict) else parse_effects(effects)
     model = build_model(unit, chosen, meas)
     ev = Evaluator(meas, max_steps=max_steps)
-    prob = make_problem(model, meas, ev, rows=rows, start=start)
-    fit_many(ev, [prob])
-    return result_of(ev, prob, unit=model.name)
+    # the effects' other start values run in the same lockstep (about free); the lowest cost wins
+    probs = [make_problem(model, meas, ev, rows=rows, start=start)]
+    probs += [make_problem(model, meas, ev, rows=rows, start={**(start or {}), **alt})
+              for alt in other_starts(model, meas)]
+    fit_many(ev, probs)
+    return result_of(ev, min(probs, key=lambda p: p.cost), unit=model.name)

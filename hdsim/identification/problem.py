@@ -309,6 +309,16 @@ class FitProblem:
         return 1e-5 * np.maximum(1.0, np.abs(self.u)) if self.u.size else self.u
 
 
+def other_starts(model: HarmonicDrive, meas: Measurement) -> list[dict]:
+    """Start values by dotted name worth a fit of their own (`Effect.other_starts`)."""
+    context = fit_context(meas, model)
+    out = []
+    for family in SLOTS:
+        for values in getattr(model, family).other_starts(context):
+            out.append({f"{family}.{name}": float(v) for name, v in values.items()})
+    return out
+
+
 def make_problem(model: HarmonicDrive, meas: Measurement, ev: Evaluator, rows=None, start: dict | None = None,
                  label: str = "", context: FitContext | None = None) -> FitProblem:
     """The fit of ``model`` to ``meas``: K0 plus each effect's free parameters.

@@ -259,6 +259,39 @@ def _md_table(head, rows):
 
 
 CHECK_HEAD = ("status", "check", "what the data say")
+CONFIDENCE_HEAD = ("model", "Δelpd [nats]", "SE", "P(added)")
+
+
+def _confidence_rounds(d: dict) -> list:
+    """[(round, rows)] of the comparison tables with each model's probability of being added."""
+    conf = d.get("confidence") or {}
+    out = []
+    for r in conf.get("rounds", []):
+        probs = r["probabilities"]
+        rows = []
+        for c in r["comparison"]:
+            key = "none" if c["model"].startswith("(") else c["model"]
+            p = probs.get(key)
+            se = "–" if c["se_diff"] is None else f"{c['se_diff']:.1f}"
+            rows.append((c["model"], f"{c['elpd_diff']:.1f}", se, "–" if p is None else f"{p:.2f}"))
+        out.append((r["round"], rows))
+    return out
+
+
+def _ambiguity_text(a: dict) -> str:
+    first, second = a["families"][:2]
+    if a.get("added") is False:
+        return (f"{first} and {second}: this record cannot tell them apart, so neither was added; "
+                f"to separate them: {a['measurement']}")
+    return f"{first} and {second} explain the residual about equally well; to separate them: {a['measurement']}"
+
+
+def _confidence_intro(d: dict) -> str:
+    conf = d.get("confidence") or {}
+    return (f"Hold-out predictions compared by their expected log predictive density (the best model "
+            f"first; SE of the difference over {conf.get('blocks', 0)} blocks: "
+            f"{conf.get('block_rule', '')}); P(added): share of {conf.get('resamples', 0)} block-bootstrap "
+            f"resamples of the record in which the rule adds that family in that round.")
 
 
 def _outcome_line(assessment: dict) -> str:
@@ -286,10 +319,13 @@ def _markdown(diagnosis, assessment: dict, figures) -> str:
              _md_table(TABLE_HEAD, _rows(diagnosis)), ""]
     for n, effects, lines in _rounds(diagnosis):
         parts += [f"## Round {n} (model: {effects})", "", _md_table(ROUND_HEAD, lines), ""]
+    if _confidence_rounds(d):
+        parts += ["## How sure", "", _confidence_intro(d), ""]
+        for n, rows in _confidence_rounds(d):
+            parts += [f"Round {n}:", "", _md_table(CONFIDENCE_HEAD, rows), ""]
     if d["ambiguous"]:
         parts += ["## Ambiguous", ""]
-        parts += [f"- {a['families'][0]} and {a['families'][1]} explain the residual about equally "
-                  f"well; to separate them: {a['measurement']}" for a in d["ambiguous"]]
+        parts += [f"- {_ambiguity_text(a)}" for a in d["ambiguous"]]
         parts.append("")
     parts += ["## Where the model fails", "", "Baseline:", ""]
     parts += [f"- {s}" for s in d["findings"]["baseline"]]
@@ -321,10 +357,13 @@ def _html(diagnosis, assessment: dict, figures) -> str:
             _html_table(TABLE_HEAD, _rows(diagnosis))]
     for n, effects, lines in _rounds(diagnosis):
         body += [f"<h2>Round {n} (model: {html.escape(effects)})</h2>", _html_table(ROUND_HEAD, lines)]
+    if _confidence_rounds(d):
+        body += ["<h2>How sure</h2>", f"<p>{html.escape(_confidence_intro(d))}</p>"]
+        for n, rows in _confidence_rounds(d):
+            body += [f"<p>Round {n}:</p>", _html_table(CONFIDENCE_HEAD, rows)]
     if d["ambiguous"]:
         body.append("<h2>Ambiguous</h2><ul>" + "".join(
-            f"<li>{html.escape(a['families'][0])} and {html.escape(a['families'][1])}: "
-            f"{html.escape(a['measurement'])}</li>" for a in d["ambiguous"]) + "</ul>")
+            f"<li>{html.escape(_ambiguity_text(a))}</li>" for a in d["ambiguous"]) + "</ul>")
     body.append("<h2>Where the model fails</h2><p>Baseline:</p><ul>" +
                 "".join(f"<li>{html.escape(s)}</li>" for s in d["findings"]["baseline"]) +
                 "</ul><p>Final model:</p><ul>" +

@@ -101,6 +101,15 @@ class Effect(Parameters):
             out.append(FreeParameter(name, float(lower), float(upper), start))
         return tuple(out)
 
+    def other_starts(self, context: FitContext) -> tuple[dict, ...]:
+        """Further start values ``{parameter: value}`` worth a fit of their own.
+
+        For a law whose fit has distant minima (a friction that holds the body's windup
+        against the load, or one that slips at a small fraction of it); every start is
+        fitted in the same lockstep and the lowest cost wins. Default: none.
+        """
+        return ()
+
     def fit_updates(self, values: dict, engagement=None) -> dict:
         """Dotted model updates ``{"family.field": value}`` from fitted ``values``.
 

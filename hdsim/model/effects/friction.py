@@ -207,6 +207,12 @@ class DahlFriction(_DahlLaw):
         return (FreeParameter("torque_max", 0.0, np.inf, start),
                 FreeParameter("sigma", 0.0, np.inf, 2.0 * context.stiffness))
 
+    def other_starts(self, context: FitContext):
+        # a kinematic-error run swings the load once per reversal and shows no loop at
+        # zero torque to start from; a friction of half the largest torque (the windup
+        # that holds the body on reversal) is another basin, far from the default's
+        return ({"torque_max": 0.5 * context.max_torque},)
+
     @classmethod
     def neutral(cls):
         return cls.unchecked(torque_max=1.0, sigma=0.0)  # zero slope: z stays 0
