@@ -24,7 +24,8 @@ Procedure
    ordinary BIC would then reward any extra flexibility that soaks up some of the
    structure. Lower is better; the ranking is by score.
 4. Accept the best candidate only if **all** of: ``score < −10`` (Kass–Raftery "very
-   strong" evidence); its hold-out prediction error, the two folds pooled, is at least
+   strong" evidence), or a hold-out gain of at least 10 % on both folds (a residual so
+   correlated that n_eff makes the score timid); its hold-out prediction error, the two folds pooled, is at least
    5 % below the baseline's; and the fit on all rows lowers the rms error by at least
    5 %. (Pooled, not fold by fold: when the folds are the two loading rates, a fit on
    the slow rate alone cannot tell damping from friction, so its prediction of the fast
@@ -34,7 +35,12 @@ Procedure
    passes, or when the residual is explained (white, or at the noise floor).
 5. *Ambiguity*: when the runner-up also passes and its score is within
    ``max(10, 10 %)`` of the best, the pair is reported with the measurement that would
-   separate them (`SEPARATING`); the better one is still added.
+   separate them (`SEPARATING`); the better one is still added. At one loading rate,
+   damping and friction are not told apart by a guess: when one is best and the other
+   is in the model, or explains the residual within max(20, 25 %) of it, neither is
+   added and the pair is reported (`_rate_ambiguity`).
+6. *How sure*: block-bootstrap inclusion probabilities and a ``loo_compare``-style table
+   per round (`hdsim.identification.confidence`).
 
 Whiteness of the final residual (`hdsim.identification.residuals.whiteness`) decides the verdict:
 a residual that is neither white nor at the noise floor means the model still misses
@@ -42,7 +48,8 @@ something (a form the library lacks, or an effect outside it) and no success is 
 
 The acceptance rule is tuned on the battery ``validation/diagnosis_battery.py`` (truth
 data from ``tests/truth.py``, forms unlike the library's; the slow tests of
-``tests/test_diagnosis.py`` run a part of it): its rates are in the tutorial
+``tests/test_diagnosis.py`` run a part of it) and checked on held-out seeds of the truth
+zoo (``validation/zoo_battery.py``): its rates are in the tutorial
 ``docs/tutorial-find-missing-effect.md``.
 """
 

@@ -102,7 +102,8 @@ def fit_context(meas: Measurement, model: HarmonicDrive) -> FitContext:
         K = float(model.base_stiffness)
     sig = zero_torque_signatures(meas)
     return FitContext(stiffness=float(K), max_torque=float(np.max(np.abs(meas.torque))),
-                      loop_width=sig["loop_width"], step=sig["step"], rate=sig["rate"], linear_spring=linear)
+                      loop_width=sig["loop_width"], step=sig["step"], rate=sig["rate"], linear_spring=linear,
+                      test=meas.test)
 
 
 # --------------------------------------------------------------------------- stiffness split

@@ -45,6 +45,8 @@ class FitContext:
     linear_spring : bool
         True when the model has no hardening (a parameter that acts only through the
         tangent stiffness is then not identifiable).
+    test : str
+        The measurement's test (``stiffness``, ``kinematic_error``).
     """
 
     stiffness: float
@@ -53,6 +55,7 @@ class FitContext:
     step: float = 0.0
     rate: float = 0.0
     linear_spring: bool = True
+    test: str = "stiffness"
 
 
 @dataclass(frozen=True)

@@ -210,7 +210,12 @@ class DahlFriction(_DahlLaw):
     def other_starts(self, context: FitContext):
         # a kinematic-error run swings the load once per reversal and shows no loop at
         # zero torque to start from; a friction of half the largest torque (the windup
-        # that holds the body on reversal) is another basin, far from the default's
+        # that holds the body on reversal) is another basin, far from the default's.
+        # A locked test's loop at zero torque gives the default start; there the second
+        # basin let a candidate friction pose as a stiffness change (diagnosis battery:
+        # friction added to hardening + backlash in 2 of 5, a hidden backlash missed)
+        if context.test != "kinematic_error":
+            return ()
         return ({"torque_max": 0.5 * context.max_torque},)
 
     @classmethod
