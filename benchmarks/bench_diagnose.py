@@ -8,9 +8,10 @@ The file comes from ``tests/truth.py`` (independent truth: hardening hidden, Bou
 friction in the baseline, two loading rates, encoder noise and quantisation). ``hdsim
 diagnose`` runs as a user would run it (a subprocess of the console entry point);
 ``--max-rounds 2`` holds it to at most two rounds. Round 1 tries hardening, backlash and
-damping, each on all rows and on two hold-out folds from several starts in one lockstep
-(`hdsim.identification.optimizer.fit_many`); round 2 tries the two left (and, since
-the friction's second start found the Bouc–Wen loop's better Dahl fit, adds neither).
+damping, each on all rows and on two hold-out folds, warm and fresh, in one lockstep
+(`hdsim.identification.optimizer.fit_many`); round 2 tries the two left and adds
+damping, a proxy for the Bouc–Wen loop shape that Dahl does not match (see the
+tutorial's "Known limitations").
 The target is 10 s on the project's 2-core machine; the JSON line says how far off it is.
 The cost is the quasi-static evaluator's loop over the samples, one pass per optimiser
 tick (``passes``): see "Speed" in ``docs/tutorial-find-missing-effect.md``.

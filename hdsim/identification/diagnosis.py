@@ -93,7 +93,7 @@ SHAPE_MARGIN = 0.25
 #: iterations of every fit of a diagnosis at most. A round's lockstep takes as many passes
 #: as its slowest fit; past 15 the slow ones are fits crawling towards a proxy's optimum,
 #: and stopping them early errs towards not adding (the score only falls with iterations).
-#: On the 20,000-row bench: 48 passes instead of 70, the same decisions
+#: On the 20,000-row bench: 43 passes instead of 55, the same decisions
 MAX_ITERATIONS = 15
 #: the families whose difference is the loading rate
 RATE_PAIR = frozenset({"damping", "friction"})
