@@ -481,9 +481,7 @@ def _confidence(meas: Measurement, steps: list, masks: list, one_rate: bool) -> 
                         chosen &= ~mine
                     elif other in fams:
                         j = fams.index(other)
-                        rival = np.array(scores)[j]
-                        close = (rival < SCORE_THRESHOLD) & (rival - S[i] < np.maximum(20.0, SHAPE_MARGIN * np.abs(S[i])))
-                        chosen &= ~(mine & close)
+                        chosen &= ~(mine & _explains_as_well(S[i], np.array(scores)[j]))
             for i, c in enumerate(cands):
                 probabilities[c.family] = float(np.mean(chosen & (best == i)))
             probabilities["none"] = float(1.0 - np.mean(chosen))
@@ -520,10 +518,16 @@ def _rate_ambiguity(best: Candidate, scored: list, current: dict):
     if other in current:
         return sorted(RATE_PAIR)
     rival = next((c for c in scored if c.family == other), None)
-    if rival is None or not rival.score < SCORE_THRESHOLD:
+    if rival is None or not _explains_as_well(best.score, rival.score):
         return None
-    margin = max(20.0, SHAPE_MARGIN * abs(best.score))
-    return sorted(RATE_PAIR) if rival.score - best.score < margin else None
+    return sorted(RATE_PAIR)
+
+
+def _explains_as_well(best_score, rival_score):
+    """The rival also explains the residual (score below the threshold) within
+    max(20, ``SHAPE_MARGIN``·|best|) of the best score (numpy-vectorised)."""
+    return (rival_score < SCORE_THRESHOLD) & (rival_score - best_score
+                                               < np.maximum(20.0, SHAPE_MARGIN * np.abs(best_score)))
 
 
 def _score(family: str, effect_id: str, res: list, base: Step) -> Candidate:
