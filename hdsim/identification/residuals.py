@@ -24,7 +24,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import stats
+# the χ² tail from scipy.special: scipy.stats would add 0.8 s to every `hdsim diagnose`
+from scipy.special import chdtrc
 
 from hdsim.io.data_checks import loading_direction
 from hdsim.units import ARCMIN_PER_RAD, ARCSEC_PER_RAD
@@ -60,7 +61,7 @@ def ljung_box(r, lags: int = 20) -> tuple[float, float]:
         return 0.0, 1.0
     acf = np.array([float(r[k:] @ r[:-k]) / den for k in range(1, lags + 1)])
     q = n * (n + 2) * float(np.sum(acf**2 / (n - np.arange(1, lags + 1))))
-    return q, float(stats.chi2.sf(q, lags))
+    return q, float(chdtrc(lags, q))  # χ²(lags) survival function
 
 
 def noise_floor(r) -> float:

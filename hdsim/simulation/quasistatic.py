@@ -54,6 +54,7 @@ Every registered effect works here, including a law defined outside the package;
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -121,11 +122,11 @@ def stack_models(models) -> Plan:
 def _phi_functions(mu):
     """β(μ) = μ/(e^μ − 1) and γ(μ) = (1 − β)/μ, with their limits β(0) = 1, γ(0) = 1/2.
 
-    ``μ = ∞`` (no damping) gives β = γ = 0.
+    ``μ = ∞`` (no damping) gives β = γ = 0. Overflow and ∞/∞ are expected here: the
+    caller (`locked_twist`) runs under ``np.errstate`` that ignores them.
     """
-    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        beta = mu / np.expm1(mu)
-        gamma = np.where(mu > 1e-4, (1.0 - beta) / mu, 0.5 - mu / 6.0)
+    beta = mu / np.expm1(mu)
+    gamma = np.where(mu > 1e-4, (1.0 - beta) / mu, 0.5 - mu / 6.0)
     return beta, gamma
 
 
@@ -169,11 +170,10 @@ class _Kernel:
         ``k`` and ``u`` are the spring's tangent and torque at the start of the step (from
         the previous step's last Newton evaluation); ``k`` also sets ``c(e)``.
         """
-        if not self.any_damping or not np.isfinite(h):
+        if not self.any_damping or not math.isfinite(h):
             return None
         c = self.coefficient(k)
-        direction = np.where(dT >= 0.0, 1.0, -1.0)
-        k_body = self.friction.path_tangent(states, direction, u, k)
+        k_body = self.friction.path_tangent(states, 1.0 if dT >= 0.0 else -1.0, u, k)
         mu = k_body * h / (c + 1e-300)  # c = 0: μ ≈ ∞, β = γ = 0
         beta, gamma = _phi_functions(mu)
         return c * beta / h, gamma * dT
@@ -253,7 +253,9 @@ def locked_twist(models, time, torque, *, grid=None, tol=1e-9, x_tol=1e-8, max_i
     if on_failure not in ("raise", "nan"):
         raise InputError(f"on_failure must be 'raise' or 'nan', got {on_failure!r}")
     plan = models if isinstance(models, Plan) else stack_models(models)
-    with np.errstate(over="ignore"):  # cosh overflow far out on the tanh law: tangent → K∞
+    # cosh overflow far out on the tanh law (tangent → K∞); e^μ overflow and ∞/∞ in the
+    # fitted rate of an undamped row (β = γ = 0, `_phi_functions`); an empty bracket's midpoint
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         out, failed = _locked_twist(plan, t, T, grid, tol, x_tol, max_iter, return_states)
     if np.any(failed >= 0):
         x = out[0] if return_states else out
@@ -280,22 +282,20 @@ def _locked_twist(plan, t, T, grid, tol, x_tol, max_iter, return_states):
     e_out = np.empty((M, idx.size))
     s_out = np.empty((kern.n_states, M, idx.size)) if return_states else None
     k0 = kern.k0
-    failed = np.full(M, -1)  # first grid sample whose balance was not solved, per row
-    e, s, u, k, ok = _solve(kern, Tg[0] / k0, np.zeros(M), kern.zero_states(), Tg[0], None, tol_T, x_tol,
-                            max_iter, np.abs(Tg[0]) / k0)
-    failed[(failed < 0) & ~ok] = idx[0]
+    solved = np.empty((M, idx.size), dtype=bool)  # balance solved, per row and grid sample
+    e, s, u, k, solved[:, 0] = _solve(kern, Tg[0] / k0, np.zeros(M), kern.zero_states(), Tg[0], None, tol_T,
+                                      x_tol, max_iter, np.abs(Tg[0]) / k0)
     e_out[:, 0] = e
     if return_states:
         s_out[:, :, 0] = s
     e_prev, h_prev = e, None
+    steps, torque_steps = np.diff(tg).tolist(), np.diff(Tg).tolist()  # Python floats: cheaper per step
     for j in range(1, idx.size):
-        h = tg[j] - tg[j - 1]
-        dT = Tg[j] - Tg[j - 1]
+        h, dT = steps[j - 1], torque_steps[j - 1]
         guess = e + dT / k0 if h_prev is None else e + (e - e_prev) * (h / h_prev)
         rate = kern.rate_coefficients(k, u, s, dT, h)
-        e_new, s, u, k, ok = _solve(kern, guess, e, s, Tg[j], rate, tol_T, x_tol, max_iter,
-                                    np.abs(dT) / k0)
-        failed[(failed < 0) & ~ok] = idx[j]
+        e_new, s, u, k, solved[:, j] = _solve(kern, guess, e, s, Tg[j], rate, tol_T, x_tol, max_iter,
+                                              abs(dT) / k0)
         e_prev, e, h_prev = e, e_new, h
         e_out[:, j] = e
         if return_states:
@@ -306,6 +306,7 @@ def _locked_twist(plan, t, T, grid, tol, x_tol, max_iter, return_states):
         if return_states:
             s_out = np.array([_interp_rows(t, tg, rows) for rows in s_out]).reshape(kern.n_states, M, t.size)
     x_out = kern.output_twist(e_out, T)
+    failed = np.where(solved.all(axis=1), -1, idx[np.argmin(solved, axis=1)])  # first unsolved sample
     if not return_states:
         return x_out, failed
     return (x_out, (s_out[0] if kern.n_states == 1 else s_out)), failed
@@ -324,7 +325,6 @@ def _solve(kern, guess, e0, s0, torque, rate, tol_T, x_tol, max_iter, x_scale):
     """
     x = guess
     lo = hi = None
-    solved = np.zeros(np.shape(x), dtype=bool)
     for it in range(max_iter):
         g, dg, u, k = kern.balance(x, e0, s0, torque, rate)
         # the balance is increasing in e (dg ≥ spring tangent > 0); the floor guards round-off
@@ -340,15 +340,14 @@ def _solve(kern, guess, e0, s0, torque, rate, tol_T, x_tol, max_iter, x_scale):
             step = np.clip(step, -limit, limit)
             xn = x + step
             both = np.isfinite(lo) & np.isfinite(hi)
-            with np.errstate(invalid="ignore"):
-                mid = 0.5 * (lo + hi)
+            mid = 0.5 * (lo + hi)
             xn = np.where(both & ((xn <= lo) | (xn >= hi)), mid, xn)
             base = np.where(both, base, 2.0 * base)
             step = np.where(np.abs(g) <= tol_T, 0.0, xn - x)
-        solved = (np.abs(step) <= x_tol) | (np.abs(g) <= tol_T)
         x = x + step
         if np.abs(step).max() <= x_tol:
             break
+    solved = (np.abs(step) <= x_tol) | (np.abs(g) <= tol_T)
     s = kern.friction.advance(s0, e0, x, kern.spring) if kern.n_states else s0
     return x, s, u, k, solved & np.isfinite(x)
 

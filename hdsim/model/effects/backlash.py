@@ -179,9 +179,19 @@ class DeadZoneBacklash(Backlash):
         v = np.asarray(torque, dtype=float) / base_stiffness
         gap = np.asarray(self.gap, dtype=float)
         if gap.ndim == 1 and v.ndim == 2:  # a batch (M,) against (M, samples)
+            if not np.all(gap > 0.0):
+                # a stacked batch whose other rows carry no gap (a diagnosis round): a closed
+                # gap carries no twist, and those rows skip the inverse, a pass over every sample
+                out = np.zeros_like(v)
+                open_ = gap > 0.0
+                out[open_] = self._twist_in_gap(v[open_], gap[open_, None])
+                return out
             gap = gap[:, None]
+        return self._twist_in_gap(v, gap)
+
+    def _twist_in_gap(self, contact_twist, gap):
         width = self.contact_rounding * gap + 1e-12
-        return bl.inverse_smooth_dead_zone(v, 0.5 * gap, width) - v
+        return bl.inverse_smooth_dead_zone(contact_twist, 0.5 * gap, width) - contact_twist
 
     def free_parameters(self, context: FitContext):
         return (FreeParameter("gap", 0.0, 0.05, float(np.clip(context.step, 2e-5, 1e-2))),)

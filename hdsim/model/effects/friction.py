@@ -182,6 +182,18 @@ class _DahlLaw(Friction):
         sigma, F = self._law()
         return spring_tangent + fr.dahl_slope(states[0], direction, sigma, F)
 
+    def quasistatic(self, states, start, end, spring):
+        # the generic step (advance, body torque, path tangent) with the exponential and
+        # the slope computed once: the evaluator calls this for every Newton iteration of
+        # every sample, where the cost is the number of numpy calls, not their size
+        decay, F = self._decay
+        step = end - start
+        target = np.copysign(F, step)
+        z = target - (target - states[0]) * np.exp(-decay * np.abs(step))
+        u, k = spring(end)
+        slope = fr.dahl_slope(z, np.copysign(1.0, step), self._law()[0], F)
+        return u + z, k + slope, z[None], u, k
+
 
 @dataclass(frozen=True, eq=False)
 class DahlFriction(_DahlLaw):
