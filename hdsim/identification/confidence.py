@@ -38,7 +38,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["BlockSums", "block_labels", "block_sums", "resample_counts", "comparison_table", "RESAMPLES"]
+from hdsim.identification.folds import blocks
+from hdsim.identification.selection import RATE_PAIR, explains_as_well, rule
+
+__all__ = ["BlockSums", "block_labels", "block_sums", "resample_counts", "comparison_table", "RESAMPLES",
+           "diagnosis_confidence"]
 
 #: resamples of the blocks: the standard error of a probability p is √(p(1−p)/R) ≤ 0.016
 RESAMPLES = 1000
@@ -111,3 +115,68 @@ def comparison_table(names, holdout_residuals, labels: np.ndarray) -> list[dict]
         rows.append({"model": names[i], "elpd": float(elpd[i]), "elpd_diff": float(elpd[i] - elpd[best]),
                      "se_diff": 0.0 if i == best else se})
     return rows
+
+
+def diagnosis_confidence(meas, steps: list, masks: list, one_rate: bool) -> dict:
+    """Inclusion probabilities and comparison tables by round (`hdsim.identification.confidence`)."""
+    starts, block_rule = blocks(meas)
+    n = len(meas)
+    labels = block_labels(n, starts)
+    B = int(labels.max()) + 1
+    counts = resample_counts(B) if B >= 2 else None
+    fold_of_row = masks[1].astype(int)
+    n_star = counts @ np.bincount(labels, minlength=B) if counts is not None else None
+
+    def sums(fit, fold_fits):
+        holdout = np.where(masks[0], fold_fits[1].residual, fold_fits[0].residual)
+        return block_sums(labels, B, fit.residual, holdout, fold_of_row), holdout
+
+    out_rounds, inclusion = [], {}
+    for k, step in enumerate(steps):
+        cands = [c for c in step.candidates if c.fit is not None and len(c.fold_fits) == 2]
+        if not cands:
+            continue
+        base, base_holdout = sums(step.fit, step.fold_fits)
+        holdouts, probabilities = [base_holdout], {}
+        scores, ok = [], []
+        for c in cands:
+            cs, holdout = sums(c.fit, c.fold_fits)
+            holdouts.append(holdout)
+            if counts is None:
+                continue
+            ratio = lambda a, b: np.maximum(counts @ a, 1e-300) / np.maximum(counts @ b, 1e-300)  # noqa: E731
+            n_eff = np.maximum(n_star * c.n_eff / n, 2.0)
+            score = n_eff * np.log(ratio(cs.fit, base.fit)) + (c.fit.n_params - step.fit.n_params) * np.log(n_eff)
+            fold_min = np.minimum(*(1.0 - np.sqrt(ratio(cs.holdout_by_fold[i], base.holdout_by_fold[i]))
+                                    for i in (0, 1)))
+            parts = rule(score, fold_min, 1.0 - np.sqrt(ratio(cs.holdout, base.holdout)),
+                          1.0 - np.sqrt(ratio(cs.fit, base.fit)))
+            scores.append(score)
+            ok.append(parts[0] & parts[1] & parts[2])
+        if counts is not None:
+            S = np.where(np.array(ok), np.array(scores), np.inf)
+            best = np.argmin(S, axis=0)
+            chosen = np.isfinite(np.min(S, axis=0))
+            if one_rate:  # the same stop as the procedure's when one rate cannot separate the pair
+                fams = [c.family for c in cands]
+                for i, c in enumerate(cands):
+                    if c.family not in RATE_PAIR:
+                        continue
+                    other = next(iter(RATE_PAIR - {c.family}))
+                    mine = chosen & (best == i)
+                    if other in step.effects:
+                        chosen &= ~mine
+                    elif other in fams:
+                        j = fams.index(other)
+                        chosen &= ~(mine & explains_as_well(S[i], np.array(scores)[j]))
+            for i, c in enumerate(cands):
+                probabilities[c.family] = float(np.mean(chosen & (best == i)))
+            probabilities["none"] = float(1.0 - np.mean(chosen))
+            # a family's figure is from its last round as a candidate: the round that
+            # added it (it is no candidate afterwards), else the round the procedure stopped
+            inclusion.update({c.family: probabilities[c.family] for c in cands})
+        names = ["(nothing added)"] + [c.family for c in cands]
+        out_rounds.append({"round": k + 1, "probabilities": probabilities,
+                           "comparison": comparison_table(names, holdouts, labels)})
+    return {"blocks": B, "block_rule": block_rule, "resamples": 0 if counts is None else int(counts.shape[0]),
+            "inclusion": inclusion, "rounds": out_rounds}

@@ -38,7 +38,7 @@ Procedure
    separate them (`SEPARATING`); the better one is still added. At one loading rate,
    damping and friction are not told apart by a guess: when one is best and the other
    is in the model, or explains the residual within max(20, 25 %) of it, neither is
-   added and the pair is reported (`_rate_ambiguity`).
+   added and the pair is reported (`hdsim.identification.selection.rate_ambiguity`).
 6. *How sure*: block-bootstrap inclusion probabilities and a ``loo_compare``-style table
    per round (`hdsim.identification.confidence`).
 
@@ -55,66 +55,30 @@ zoo (``validation/zoo_battery.py``): its rates are in the tutorial
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from hdsim.errors import InputError, SolverError
-from hdsim.identification.fit import (Evaluator, FitResult, build_model, effective_n, fit_many, make_problem,
+from hdsim.identification.fit import (Evaluator, FitResult, build_model, fit_many, make_problem,
                                       parse_effects, result_of)
 from hdsim.identification.problem import other_starts
 from hdsim.model import effects as fx
 from hdsim.io.measurement import Measurement
 from hdsim.model.drive import SLOTS
-from hdsim.identification.confidence import block_labels, block_sums, comparison_table, resample_counts
-from hdsim.identification.folds import blocks, folds, one_loading_rate
+from hdsim.identification.confidence import diagnosis_confidence
+from hdsim.identification.folds import folds, one_loading_rate
+from hdsim.identification.selection import (HOLDOUT_GAIN, MIN_GAIN, SCORE_THRESHOLD, SEPARATING, TIE_FRACTION,
+                                            Candidate, rate_ambiguity, score_candidate, separating)
 from hdsim.identification.residuals import findings, whiteness
 
 __all__ = ["Diagnosis", "diagnose", "folds", "SEPARATING", "SCORE_THRESHOLD",
            "HOLDOUT_GAIN", "MIN_GAIN"]
 
-#: accept only below this score (ΔBIC with the effective sample size)
-SCORE_THRESHOLD = -10.0
-#: hold-out prediction error, both folds pooled, must fall by at least this fraction
-HOLDOUT_GAIN = 0.05
-#: rms error on all rows must fall by at least this fraction
-MIN_GAIN = 0.05
-#: near-tie: runner-up within max(10, this fraction of |best score|)
-TIE_FRACTION = 0.10
-#: a hold-out gain this large on *both* folds stands for the score: a model far from the
-#: record leaves a strongly correlated residual whose n_eff makes the BIC timid (the
-#: kinematic error under a varying load halves the rms at a score of +7)
-STRONG_HOLDOUT_GAIN = 0.10
-#: at one loading rate, damping and friction are told apart by loop shape only when their
-#: scores differ by more than max(20, this fraction of |best score|)
-SHAPE_MARGIN = 0.25
 #: iterations of every fit of a diagnosis at most. A round's lockstep takes as many passes
 #: as its slowest fit; past 15 the slow ones are fits crawling towards a proxy's optimum,
 #: and stopping them early errs towards not adding (the score only falls with iterations).
 #: On the 20,000-row bench: 43 passes instead of 55, the same decisions
 MAX_ITERATIONS = 15
-#: the families whose difference is the loading rate
-RATE_PAIR = frozenset({"damping", "friction"})
-
-#: the measurement that separates two families explaining the residual about equally well
-SEPARATING = {
-    frozenset({"damping", "friction"}): "a second loading rate: a damping loop widens with the "
-                                        "rate, a friction loop does not",
-    frozenset({"backlash", "friction"}): "a small-amplitude cycle (±4 % T_N lost-motion test): "
-                                         "backlash is a step of fixed width at zero torque, a "
-                                         "friction loop shrinks with the amplitude",
-    frozenset({"backlash", "damping"}): "a second loading rate: backlash does not change with "
-                                        "the rate, damping does",
-    frozenset({"backlash", "hardening"}): "a cycle to a larger torque and a small-amplitude "
-                                          "cycle: hardening bends the curve at high load, "
-                                          "backlash acts only at zero torque",
-    frozenset({"friction", "hardening"}): "unloading from several peak torques: a friction "
-                                          "loop reverses at every peak, hardening follows one curve",
-    frozenset({"damping", "hardening"}): "a second loading rate: hardening does not change with "
-                                         "the rate",
-}
 
 #: families a test can show (the stiffness test locks the wave generator: no kinematic error)
 FAMILIES_BY_TEST = {
@@ -124,50 +88,7 @@ FAMILIES_BY_TEST = {
 }
 
 
-def _separating(a: str, b: str) -> str:
-    if "kinematic_error" in (a, b):
-        return ("a kinematic-error test over several output revolutions at constant load: the "
-                "kinematic error repeats with the wave-generator angle, the other does not")
-    return SEPARATING.get(frozenset({a, b}), "a test at another loading rate and amplitude")
-
-
 # --------------------------------------------------------------------------- results
-
-
-@dataclass
-class Candidate:
-    """One family tried in one round."""
-
-    family: str
-    effect: str
-    fit: FitResult
-    fold_fits: list
-    score: float
-    n_eff: float
-    holdout_rmse: list
-    holdout_gain: list
-    pooled_holdout_gain: float
-    gain: float
-    accepted: bool = False
-    reason: str = ""
-
-    @classmethod
-    def failed(cls, family: str, effect: str, why: str) -> "Candidate":
-        """A candidate whose model could not be built or fitted: rejected, with the reason."""
-        return cls(family=family, effect=effect, fit=None, fold_fits=[], score=math.inf, n_eff=0.0,
-                   holdout_rmse=[], holdout_gain=[], pooled_holdout_gain=0.0, gain=0.0, accepted=False,
-                   reason=f"could not be fitted: {why}")
-
-    def to_json(self) -> dict:
-        if self.fit is None:
-            return {"family": self.family, "effect": self.effect, "rmse_rad": None, "score": None,
-                    "passes": False, "why": self.reason}
-        return {"family": self.family, "effect": self.effect, "rmse_rad": self.fit.rmse_rad,
-                "score": self.score, "n_eff": self.n_eff,
-                "max_abs_error_rad": self.fit.max_abs_rad,
-                "holdout_rmse_rad": self.holdout_rmse, "holdout_gain": self.holdout_gain,
-                "pooled_holdout_gain": self.pooled_holdout_gain,
-                "rmse_gain": self.gain, "passes": self.accepted, "why": self.reason}
 
 
 @dataclass
@@ -391,20 +312,20 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
             except (InputError, SolverError) as exc:
                 scored.append(Candidate.failed(family, stand_in[family], str(exc)))
                 continue
-            scored.append(_score(family, stand_in[family], res, step))
+            scored.append(score_candidate(family, stand_in[family], res, step))
         step.candidates = scored
         ranked = sorted(scored, key=lambda c: c.score)
         say("round %d: " % (rounds + 1) + ", ".join(f"{c.family} {c.score:.1f}" for c in ranked))
         best = ranked[0]
         if not best.accepted:
             break
-        pair = _rate_ambiguity(best, scored, current) if one_rate else None
+        pair = rate_ambiguity(best, scored, current) if one_rate else None
         if pair is not None:
             # one loading rate cannot say whether this loss grows with the rate: report
             # the pair and the measurement that separates it, add neither
             by_family = {c.family: c.score for c in scored}
             ambiguous.append({"families": pair, "scores": [by_family.get(f) for f in pair],
-                              "round": rounds + 1, "measurement": _separating(*pair), "added": False})
+                              "round": rounds + 1, "measurement": separating(*pair), "added": False})
             break
         if len(ranked) > 1:
             second = ranked[1]
@@ -413,7 +334,7 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
                 ambiguous.append({"families": [best.family, second.family],
                                   "scores": [best.score, second.score],
                                   "round": rounds + 1,
-                                  "measurement": _separating(best.family, second.family), "added": True})
+                                  "measurement": separating(best.family, second.family), "added": True})
         step.added = best.family
         added.append(best.family)
         current[best.family] = best.effect
@@ -427,137 +348,6 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
                      whiteness=w, findings_before=findings_before,
                      findings_after=findings(meas, step.fit.residual),
                      seconds=time.perf_counter() - t0, passes=passes,
-                     confidence=_confidence(meas, steps, masks, one_rate))
+                     confidence=diagnosis_confidence(meas, steps, masks, one_rate))
 
 
-def _confidence(meas: Measurement, steps: list, masks: list, one_rate: bool) -> dict:
-    """Inclusion probabilities and comparison tables by round (`hdsim.identification.confidence`)."""
-    starts, block_rule = blocks(meas)
-    n = len(meas)
-    labels = block_labels(n, starts)
-    B = int(labels.max()) + 1
-    counts = resample_counts(B) if B >= 2 else None
-    fold_of_row = masks[1].astype(int)
-    n_star = counts @ np.bincount(labels, minlength=B) if counts is not None else None
-
-    def sums(fit, fold_fits):
-        holdout = np.where(masks[0], fold_fits[1].residual, fold_fits[0].residual)
-        return block_sums(labels, B, fit.residual, holdout, fold_of_row), holdout
-
-    out_rounds, inclusion = [], {}
-    for k, step in enumerate(steps):
-        cands = [c for c in step.candidates if c.fit is not None and len(c.fold_fits) == 2]
-        if not cands:
-            continue
-        base, base_holdout = sums(step.fit, step.fold_fits)
-        holdouts, probabilities = [base_holdout], {}
-        scores, ok = [], []
-        for c in cands:
-            cs, holdout = sums(c.fit, c.fold_fits)
-            holdouts.append(holdout)
-            if counts is None:
-                continue
-            ratio = lambda a, b: np.maximum(counts @ a, 1e-300) / np.maximum(counts @ b, 1e-300)  # noqa: E731
-            n_eff = np.maximum(n_star * c.n_eff / n, 2.0)
-            score = n_eff * np.log(ratio(cs.fit, base.fit)) + (c.fit.n_params - step.fit.n_params) * np.log(n_eff)
-            fold_min = np.minimum(*(1.0 - np.sqrt(ratio(cs.holdout_by_fold[i], base.holdout_by_fold[i]))
-                                    for i in (0, 1)))
-            parts = _rule(score, fold_min, 1.0 - np.sqrt(ratio(cs.holdout, base.holdout)),
-                          1.0 - np.sqrt(ratio(cs.fit, base.fit)))
-            scores.append(score)
-            ok.append(parts[0] & parts[1] & parts[2])
-        if counts is not None:
-            S = np.where(np.array(ok), np.array(scores), np.inf)
-            best = np.argmin(S, axis=0)
-            chosen = np.isfinite(np.min(S, axis=0))
-            if one_rate:  # the same stop as the procedure's when one rate cannot separate the pair
-                fams = [c.family for c in cands]
-                for i, c in enumerate(cands):
-                    if c.family not in RATE_PAIR:
-                        continue
-                    other = next(iter(RATE_PAIR - {c.family}))
-                    mine = chosen & (best == i)
-                    if other in step.effects:
-                        chosen &= ~mine
-                    elif other in fams:
-                        j = fams.index(other)
-                        chosen &= ~(mine & _explains_as_well(S[i], np.array(scores)[j]))
-            for i, c in enumerate(cands):
-                probabilities[c.family] = float(np.mean(chosen & (best == i)))
-            probabilities["none"] = float(1.0 - np.mean(chosen))
-            # a family's figure is from its last round as a candidate: the round that
-            # added it (it is no candidate afterwards), else the round the procedure stopped
-            inclusion.update({c.family: probabilities[c.family] for c in cands})
-        names = ["(nothing added)"] + [c.family for c in cands]
-        out_rounds.append({"round": k + 1, "probabilities": probabilities,
-                           "comparison": comparison_table(names, holdouts, labels)})
-    return {"blocks": B, "block_rule": block_rule, "resamples": 0 if counts is None else int(counts.shape[0]),
-            "inclusion": inclusion, "rounds": out_rounds}
-
-
-def _rule(score, fold_gain_min, pooled, gain):
-    """The three conditions of step 4 (numpy-vectorised, for the bootstrap of `_confidence`):
-    evidence (score, or a strong hold-out gain on both folds), hold-out gain, rms gain."""
-    return ((score < SCORE_THRESHOLD) | (fold_gain_min >= STRONG_HOLDOUT_GAIN),
-            pooled >= HOLDOUT_GAIN, gain >= MIN_GAIN)
-
-
-def _rate_ambiguity(best: Candidate, scored: list, current: dict):
-    """The damping–friction pair when one loading rate cannot separate them, else None.
-
-    Damping is an extra loss that grows with the rate, friction one that does not; at one
-    rate only the loop's shape tells them apart, and an imperfect friction form leaves a
-    shape that damping mimics. So: when the best candidate is one of the pair and the
-    other is already in the model, or is a candidate that also explains the residual
-    (score below the threshold) within ``SHAPE_MARGIN`` of the best, the record cannot
-    decide between them.
-    """
-    if best.family not in RATE_PAIR:
-        return None
-    other = next(iter(RATE_PAIR - {best.family}))
-    if other in current:
-        return sorted(RATE_PAIR)
-    rival = next((c for c in scored if c.family == other), None)
-    if rival is None or not _explains_as_well(best.score, rival.score):
-        return None
-    return sorted(RATE_PAIR)
-
-
-def _explains_as_well(best_score, rival_score):
-    """The rival also explains the residual (score below the threshold) within
-    max(20, ``SHAPE_MARGIN``·|best|) of the best score (numpy-vectorised)."""
-    return (rival_score < SCORE_THRESHOLD) & (rival_score - best_score
-                                               < np.maximum(20.0, SHAPE_MARGIN * np.abs(best_score)))
-
-
-def _score(family: str, effect_id: str, res: list, base: Step) -> Candidate:
-    fit_all, fold_fits = res[0], res[1:]
-    r = fit_all.residual[fit_all.rows]
-    n_eff = effective_n(r)
-    dk = fit_all.n_params - base.fit.n_params
-    score = n_eff * math.log(max(fit_all.rss, 1e-300) / max(base.fit.rss, 1e-300)) + dk * math.log(n_eff)
-    hold, gains = [], []
-    pooled_c = pooled_b = 0.0
-    for cf, bf in zip(fold_fits, base.fold_fits):
-        out = ~cf.rows
-        rc, rb = cf.rmse(out), bf.rmse(out)
-        hold.append(rc)
-        gains.append(1.0 - rc / rb if rb > 0 else 0.0)
-        pooled_c += out.sum() * rc**2
-        pooled_b += out.sum() * rb**2
-    pooled = 1.0 - math.sqrt(pooled_c / pooled_b) if pooled_b > 0 else 0.0
-    gain = 1.0 - fit_all.rmse_rad / base.fit.rmse_rad if base.fit.rmse_rad > 0 else 0.0
-    fold_min = min(gains) if len(gains) == 2 else -math.inf
-    evidence, holds_out, lowers = _rule(score, fold_min, pooled, gain)
-    reasons = []
-    if not evidence:
-        reasons.append(f"score {score:.1f} not below {SCORE_THRESHOLD:g}")
-    if not holds_out:
-        reasons.append(f"hold-out error falls by only {100 * pooled:.1f} %")
-    if not lowers:
-        reasons.append(f"rms error falls by only {100 * gain:.1f} %")
-    ok = not reasons
-    return Candidate(family=family, effect=effect_id, fit=fit_all, fold_fits=fold_fits,
-                     score=float(score), n_eff=float(n_eff), holdout_rmse=hold, holdout_gain=gains,
-                     pooled_holdout_gain=float(pooled),
-                     gain=float(gain), accepted=ok, reason="passes" if ok else "; ".join(reasons))

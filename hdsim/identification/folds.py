@@ -135,7 +135,6 @@ def blocks(meas: Measurement) -> tuple[list[int], str]:
     ``MIN_BLOCKS`` cycles. Kinematic-error tests: blocks of ten
     wave-generator revolutions when that gives ten blocks or more, else single revolutions.
     """
-    n = len(meas)
     if meas.test == "kinematic_error":
         wg = np.asarray(meas.wg_angle, dtype=float)
         travel = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(wg)))]) / (2 * np.pi)
