@@ -51,6 +51,7 @@ SAMPLE = {  # one physically sensible parameter set per effect of the registry
     ("hardening", "three_segment"): dict(T1=14.0, T2=48.0, e2=2.0, e3=2.7),
     ("hardening", "tanh"): dict(e_inf=2.5, T_s=20.0),
     ("backlash", "dead_zone"): dict(gap=1e-4),
+    ("backlash", "gradual_dead_zone"): dict(gap=1e-4, contact_rounding=0.5),
     ("friction", "dahl_slip"): dict(slip_torque=3.0, slip_max=1e-4),
     ("friction", "dahl"): dict(torque_max=1.0, sigma=3 * K1),
     ("friction", "coulomb"): {f: v for f, v in dataclasses.asdict(coulomb(0.5)).items()},
@@ -138,13 +139,20 @@ def test_linear_base_is_the_elastic_closed_form(linear_run):
     assert width_at_zero_torque(run) == pytest.approx(kelvin_voigt_width(C0), rel=0.02)
 
 
-def test_backlash_gap_adds_the_gap_to_the_lost_motion(linear_run):
+@pytest.mark.parametrize("kind, rounding", [("dead_zone", {}), ("gradual_dead_zone", {"contact_rounding": 0.5})])
+def test_backlash_gap_adds_the_gap_to_the_lost_motion(linear_run, kind, rounding):
     gap = 1e-4  # 0.34 arcmin, as large as the elastic ±4 % span is 0.77 arcmin
-    _, lm = lost_motion(LINEAR.with_effects(backlash=fx.DeadZoneBacklash(gap=gap)))
+    _, lm = lost_motion(LINEAR.with_effects(backlash=fx.make_effect("backlash", kind, gap=gap, **rounding)))
     added = arcmin_to_rad(lm) - arcmin_to_rad(linear_run[1])
-    # quasi-static: the turning points sit on the elastic line shifted by ±b/2; the
-    # rounded corners close within K·0.2·b = 0.6 N·m of zero torque, far from ±A
-    assert added == pytest.approx(gap, rel=0.01)
+    # quasi-static: the turning points sit on the elastic line shifted by ±g(A), the dead
+    # zone's angle at the torque A: g = dz⁻¹(A/K) − A/K with the rounding w = ρ·b (the pure
+    # law). With ρ = 0.2 the corners close within K·w = 0.6 N·m of zero torque and 2g is
+    # b; with ρ = 0.5 the gap is still closing at ±A and 2g is 9 % short of it
+    rho = rounding.get("contact_rounding", fx.DeadZoneBacklash.contact_rounding)
+    g = float(bl.inverse_smooth_dead_zone(A / K, gap / 2, rho * gap)) - A / K
+    assert added == pytest.approx(2 * g, rel=0.01)
+    if kind == "dead_zone":
+        assert added == pytest.approx(gap, rel=0.01)
 
 
 @pytest.mark.parametrize("kind", ["three_segment", "tanh"])

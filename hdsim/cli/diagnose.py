@@ -106,12 +106,16 @@ def _print(s) -> None:
         print(f"  {c['family']:<16} {c['effect']:<10} score {c['score']:10.1f}  rms {c[key]:.3g} {unit}"
               f"  {c['why']}")
     print(f"added: {', '.join(s['added']) or 'nothing'}")
+    for r in s.get("reshaped", []):
+        print(f"other form: {r['family']} as {r['to']} instead of {r['from']} explains the residual better "
+              f"than adding {r['instead_of']} (score {r['score']:.1f})")
     inclusion = (s.get("confidence") or {}).get("inclusion")
     if inclusion:
         print("how sure (share of block-bootstrap resamples that add it): "
               + ", ".join(f"{f} {p:.2f}" for f, p in sorted(inclusion.items(), key=lambda kv: -kv[1])))
     for a in s["ambiguous"]:
-        print(f"ambiguous: {a['families'][0]} vs {a['families'][1]}; to separate them: {a['measurement']}")
+        rival = a["families"][1] + "".join(f" as {e}" for e in a.get("other_form", {}).values())
+        print(f"ambiguous: {a['families'][0]} vs {rival}; to separate them: {a['measurement']}")
     print(f"final: {', '.join(s['final']['effects']) or '(base model)'}, rms {s['final'][key]:.3g} {unit}")
     print(s["verdict"])
     print(f"outcome: {s['outcome']}" + (f"; to decide, record {s['next_measurement']}" if s["next_measurement"]

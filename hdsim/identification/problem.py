@@ -34,7 +34,7 @@ from hdsim.errors import InputError
 from hdsim.io.measurement import Measurement
 from hdsim.model.drive import SLOTS, Calibration, HarmonicDrive, compliance_chain
 from hdsim.model.effects import FitContext
-from hdsim.simulation.quasistatic import locked_twist
+from hdsim.simulation.quasistatic import locked_twist, stackable_groups
 
 __all__ = ["K0_NAME", "Evaluator", "FitProblem", "fit_context", "make_problem", "split_stiffness"]
 
@@ -250,7 +250,20 @@ class Evaluator:
         """(M, n) quasi-static twist of the stacked models; NaN rows where the balance
         could not be solved within ``max_iter`` Newton iterations per sample (the optimiser
         treats them as failed trials)."""
-        return locked_twist(models, self.t, self.T, grid=self.grid, on_failure="nan", max_iter=max_iter)
+        models = [models] if isinstance(models, HarmonicDrive) else list(models)
+        groups = stackable_groups(models)
+        if len(groups) == 1:
+            return locked_twist(models, self.t, self.T, grid=self.grid, on_failure="nan", max_iter=max_iter)
+        # models with different effect classes in one slot (a family tried in another
+        # form) cannot share a batch: one pass per group, rows put back in order
+        first = np.concatenate([[0], np.cumsum([m.batch_size for m in models])])
+        out = np.empty((first[-1], self.n))
+        for group in groups:
+            part = locked_twist([models[i] for i in group], self.t, self.T, grid=self.grid, on_failure="nan",
+                                max_iter=max_iter)
+            rows = np.concatenate([np.arange(first[i], first[i + 1]) for i in group])
+            out[rows] = part
+        return out
 
 
 # --------------------------------------------------------------------------- problems

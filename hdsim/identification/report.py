@@ -222,7 +222,8 @@ def _rows(diagnosis):
     for row in diagnosis.table():
         score = "" if row["score"] is None else f"{row['score']:.1f}"
         hold = ", ".join(f"{h * arcsec:.2f}" for h in row["holdout_rmse_rad"])
-        rows.append([str(row["step"]), "+".join(row["effects"]) or "base", row["added"] or "",
+        changed = ", ".join(f"{f} as {e}" for f, e in (row.get("other_form") or {}).items())
+        rows.append([str(row["step"]), "+".join(row["effects"]) or "base", row["added"] or changed,
                      f"{row['rmse_rad'] * arcsec:.2f}", f"{row['max_abs_error_rad'] * arcsec:.2f}",
                      hold, score])
     return rows
@@ -235,11 +236,13 @@ def _rounds(diagnosis):
         if not step.candidates:
             continue
         lines = []
-        for c in sorted(step.candidates, key=lambda c: c.score):
+        tried = [(c, c.family) for c in sorted(step.candidates, key=lambda c: c.score)]
+        tried += [(c, f"{c.family} in another form") for c in sorted(step.reshapes, key=lambda c: c.score)]
+        for c, label in tried:
             if c.fit is None:  # could not be fitted: the reason says why
-                lines.append([c.family, c.effect, "–", "–", "–", c.reason])
+                lines.append([label, c.effect, "–", "–", "–", c.reason])
                 continue
-            lines.append([c.family, c.effect, f"{c.score:.1f}", f"{c.fit.rmse_rad * arcsec:.2f}",
+            lines.append([label, c.effect, f"{c.score:.1f}", f"{c.fit.rmse_rad * arcsec:.2f}",
                           f"{100 * c.pooled_holdout_gain:.0f} % ("
                           + ", ".join(f"{100 * g:.0f} %" for g in c.holdout_gain) + ")", c.reason])
         out.append((i + 1, "+".join(step.effects) or "base", lines))
@@ -280,10 +283,20 @@ def _confidence_rounds(d: dict) -> list:
 
 def _ambiguity_text(a: dict) -> str:
     first, second = a["families"][:2]
+    if a.get("other_form"):
+        form = a["other_form"][second]
+        return (f"{first}, and {second} as {form} instead, explain the residual about equally well; {first} "
+                f"was added; to separate them: {a['measurement']}")
     if a.get("added") is False:
         return (f"{first} and {second}: this record cannot tell them apart, so neither was added; "
                 f"to separate them: {a['measurement']}")
     return f"{first} and {second} explain the residual about equally well; to separate them: {a['measurement']}"
+
+
+def _reshape_text(r: dict) -> str:
+    return (f"round {r['round']}: {r['family']} as {r['to']} instead of {r['from']} explains the residual "
+            f"better (score {r['score']:.1f}) than adding {r['instead_of']}, which was then not needed: the "
+            f"residual was the shape of the {r['family']}, not a missing effect")
 
 
 def _confidence_intro(d: dict) -> str:
@@ -323,6 +336,10 @@ def _markdown(diagnosis, assessment: dict, figures) -> str:
         parts += ["## How sure", "", _confidence_intro(d), ""]
         for n, rows in _confidence_rounds(d):
             parts += [f"Round {n}:", "", _md_table(CONFIDENCE_HEAD, rows), ""]
+    if d["reshaped"]:
+        parts += ["## Other forms", ""]
+        parts += [f"- {_reshape_text(r)}" for r in d["reshaped"]]
+        parts.append("")
     if d["ambiguous"]:
         parts += ["## Ambiguous", ""]
         parts += [f"- {_ambiguity_text(a)}" for a in d["ambiguous"]]
@@ -361,6 +378,9 @@ def _html(diagnosis, assessment: dict, figures) -> str:
         body += ["<h2>How sure</h2>", f"<p>{html.escape(_confidence_intro(d))}</p>"]
         for n, rows in _confidence_rounds(d):
             body += [f"<p>Round {n}:</p>", _html_table(CONFIDENCE_HEAD, rows)]
+    if d["reshaped"]:
+        body.append("<h2>Other forms</h2><ul>" + "".join(
+            f"<li>{html.escape(_reshape_text(r))}</li>" for r in d["reshaped"]) + "</ul>")
     if d["ambiguous"]:
         body.append("<h2>Ambiguous</h2><ul>" + "".join(
             f"<li>{html.escape(_ambiguity_text(a))}</li>" for a in d["ambiguous"]) + "</ul>")

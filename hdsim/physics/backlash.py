@@ -149,7 +149,7 @@ def inverse_smooth_dead_zone(value, half_gap, width):
     value = np.asarray(value, dtype=float)
     half = np.broadcast_to(half_gap, value.shape)
     width = np.broadcast_to(width, value.shape)
-    y = value + np.sign(value) * half
+    y = np.array(value + np.sign(value) * half, dtype=float)  # an array even for a scalar value
     near = np.abs(value) < 40.0 * width
     if np.any(near):
         v, h, w = value[near], half[near], width[near]

@@ -61,10 +61,10 @@ import numpy as np
 
 from hdsim.errors import InputError, SolverError
 from hdsim.model import effects as fx
-from hdsim.model.drive import HarmonicDrive
+from hdsim.model.drive import SLOTS, HarmonicDrive
 
-__all__ = ["UnsupportedEffect", "Plan", "stack_models", "locked_twist", "dynamic_locked_twist",
-           "sample_grid"]
+__all__ = ["UnsupportedEffect", "Plan", "stack_models", "stackable_groups", "locked_twist",
+           "dynamic_locked_twist", "sample_grid"]
 
 
 class UnsupportedEffect(InputError):
@@ -114,6 +114,23 @@ def stack_models(models) -> Plan:
                 hardening=_carrier("hardening", models, sizes), backlash=_carrier("backlash", models, sizes),
                 friction=_carrier("friction", models, sizes), damping=_carrier("damping", models, sizes),
                 memory_torque=memory, offsets=offsets)
+
+
+def stackable_groups(models) -> list[list[int]]:
+    """Indices of ``models`` split into groups that `stack_models` can stack (slot by
+    slot one effect class or none), in order of first appearance."""
+    groups, classes = [], []
+    for i, model in enumerate(models):
+        mine = {slot: type(getattr(model, slot)) for slot in SLOTS if not getattr(model, slot).is_null}
+        for members, seen in zip(groups, classes):
+            if all(seen.get(slot, cls) is cls for slot, cls in mine.items()):
+                members.append(i)
+                seen.update(mine)
+                break
+        else:
+            groups.append([i])
+            classes.append(dict(mine))
+    return groups
 
 
 # --------------------------------------------------------------------------- the step

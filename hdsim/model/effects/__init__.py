@@ -15,7 +15,7 @@ from __future__ import annotations
 from dataclasses import MISSING, fields
 
 from hdsim.errors import InputError, unknown_name
-from hdsim.model.effects.backlash import Backlash, DeadZoneBacklash, NoBacklash
+from hdsim.model.effects.backlash import Backlash, DeadZoneBacklash, GradualDeadZone, NoBacklash
 from hdsim.model.effects.base import Effect, FitContext, FreeParameter
 from hdsim.model.effects.damping import Damping, NoDamping, ViscousDamping
 from hdsim.model.effects.friction import (CoulombFriction, DahlFriction, DahlSlip, Friction, MaxwellSlip,
@@ -121,8 +121,8 @@ def make_effect(family: str, effect_id: str, **values) -> Effect:
     return cls(**values)
 
 
-for _cls in (NoHardening, ThreeSegmentHardening, NoBacklash, NoFriction, DahlSlip, CoulombFriction,
-             MaxwellSlip, NoDamping, NoKinematicError):
+for _cls in (NoHardening, ThreeSegmentHardening, NoBacklash, GradualDeadZone, NoFriction, DahlSlip,
+             CoulombFriction, MaxwellSlip, NoDamping, NoKinematicError):
     register(_cls)
 for _cls in (TanhHardening, DeadZoneBacklash, DahlFriction, ViscousDamping, FourierKinematicError):
     register(_cls, default=True)

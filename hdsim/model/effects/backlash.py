@@ -99,6 +99,7 @@ class DeadZoneBacklash(Backlash):
     """
 
     id: ClassVar[str] = "dead_zone"
+    other_forms: ClassVar[tuple[str, ...]] = ("gradual_dead_zone",)
     state_names: ClassVar[tuple[str, ...]] = ("closure",)
     gap: float = param("total backlash at the output", "rad", 0.0, 0.05)
     #: contact rounding as a fraction of the gap: 0.2 halves the solver's work at
@@ -112,8 +113,12 @@ class DeadZoneBacklash(Backlash):
     #: near contact, far faster than a test
     stabilisation_time: ClassVar[float] = 1e-3
 
+    def _width(self):
+        """Rounding width of the corners [rad] (never zero: the softplus needs a scale)."""
+        return self.contact_rounding * self.gap + 1e-12
+
     def engage(self, twist):
-        width = self.contact_rounding * self.gap + 1e-12
+        width = self._width()
         half = 0.5 * self.gap
         return bl.smooth_dead_zone(twist, half, width), bl.smooth_contact(twist, half, width)
 
@@ -170,7 +175,7 @@ class DeadZoneBacklash(Backlash):
     def stored_energy(self, states, base_stiffness):
         # ∫ T dg = K₀ [∫₀^v dz − (1 − ε) dz(v)²/2]: the contact compliance ε/K₀ in contact
         v = np.asarray(states, dtype=float)[0]
-        width = self.contact_rounding * self.gap + 1e-12
+        width = self._width()
         closed, _ = self.engage(v)
         return base_stiffness * (bl.smooth_dead_zone_integral(v, 0.5 * self.gap, width)
                                  - 0.5 * (1.0 - self.contact_compliance_share) * closed**2)
@@ -178,20 +183,16 @@ class DeadZoneBacklash(Backlash):
     def twist_at_torque(self, torque, base_stiffness):
         v = np.asarray(torque, dtype=float) / base_stiffness
         gap = np.asarray(self.gap, dtype=float)
+        rounding = np.asarray(self.contact_rounding, dtype=float)
         if gap.ndim == 1 and v.ndim == 2:  # a batch (M,) against (M, samples)
-            if not np.all(gap > 0.0):
-                # a stacked batch whose other rows carry no gap (a diagnosis round): a closed
-                # gap carries no twist, and those rows skip the inverse, a pass over every sample
-                out = np.zeros_like(v)
-                open_ = gap > 0.0
-                out[open_] = self._twist_in_gap(v[open_], gap[open_, None])
-                return out
-            gap = gap[:, None]
-        return self._twist_in_gap(v, gap)
-
-    def _twist_in_gap(self, contact_twist, gap):
-        width = self.contact_rounding * gap + 1e-12
-        return bl.inverse_smooth_dead_zone(contact_twist, 0.5 * gap, width) - contact_twist
+            rounding = np.broadcast_to(rounding, gap.shape)
+            # rows without a gap (the other rows of a diagnosis round) carry no twist in
+            # it and skip the inverse, a pass over every sample
+            out = np.zeros_like(v)
+            open_ = gap > 0.0
+            out[open_] = _twist_in_gap(v[open_], gap[open_, None], rounding[open_, None])
+            return out
+        return _twist_in_gap(v, gap, rounding)
 
     def free_parameters(self, context: FitContext):
         return (FreeParameter("gap", 0.0, 0.05, float(np.clip(context.step, 2e-5, 1e-2))),)
@@ -203,3 +204,36 @@ class DeadZoneBacklash(Backlash):
     @classmethod
     def placeholder(cls, rated_torque, stiffness):
         return cls(gap=1e-4)
+
+
+def _twist_in_gap(contact_twist, gap, rounding):
+    """Angle of the dead zone [rad] that carries the twist ``contact_twist`` of its contact."""
+    width = rounding * gap + 1e-12
+    return bl.inverse_smooth_dead_zone(contact_twist, 0.5 * gap, width) - contact_twist
+
+
+@dataclass(frozen=True, eq=False)
+class GradualDeadZone(DeadZoneBacklash):
+    """A dead zone whose flanks meet gradually: the rounding of its corners is a parameter.
+
+    The flanks of a real gap do not close at one torque: contact compliance, tooth
+    profile errors and the load shared by more teeth make the gap close over a range of
+    torque of about ``K₀·contact_rounding·gap``. `DeadZoneBacklash` fixes the rounding
+    at 0.2 (a numerical aid); this form fits it, from nearly sharp (0.01) to a gap that
+    closes over ten times its width.
+    """
+
+    id: ClassVar[str] = "gradual_dead_zone"
+    other_forms: ClassVar[tuple[str, ...]] = ("dead_zone",)
+    contact_rounding: float = param("width of the closing as a share of the gap", "-", 0.01, 10.0, default=0.2)
+
+    def free_parameters(self, context: FitContext):
+        return super().free_parameters(context) + (FreeParameter("contact_rounding", 0.01, 10.0, 0.5),)
+
+    @classmethod
+    def neutral(cls):
+        return cls(gap=0.0)
+
+    @classmethod
+    def placeholder(cls, rated_torque, stiffness):
+        return cls(gap=1e-4, contact_rounding=0.5)

@@ -83,6 +83,11 @@ class Effect(Parameters):
     state_names: ClassVar[tuple[str, ...]] = ()
     #: unit of each state, "rad" or "N·m": sets the solver's absolute tolerance
     state_unit: ClassVar[str] = "rad"
+    #: ids of effects of the same family that describe the same physics with another
+    #: shape (a smooth hardening and the catalog's three segments). Before a diagnosis
+    #: adds a family it tries these in place of this effect: an imperfect shape leaves a
+    #: residual that another family would otherwise be added to absorb (a proxy)
+    other_forms: ClassVar[tuple[str, ...]] = ()
 
     @property
     def prefix(self) -> str:

@@ -206,6 +206,9 @@ class DahlFriction(_DahlLaw):
     """
 
     id: ClassVar[str] = "dahl"
+    #: Dahl's exponential approach and the Maxwell-slip elements' piecewise-linear one
+    #: bracket the loop shapes of the published friction laws (Bouc–Wen, LuGre, Preisach)
+    other_forms: ClassVar[tuple[str, ...]] = ("maxwell_slip",)
     torque_max: float = param("Coulomb (saturation) torque", "N·m", positive=True)
     sigma: float = param("initial (sticking) stiffness", "N·m/rad", positive=True)
 
@@ -281,6 +284,7 @@ class MaxwellSlip(Friction):
     """
 
     id: ClassVar[str] = "maxwell_slip"
+    other_forms: ClassVar[tuple[str, ...]] = ("dahl",)
     n_elements: ClassVar[int] = 4
     state_names: ClassVar[tuple[str, ...]] = tuple(f"slip_{i}" for i in range(4))
     k_total: float = param("total element stiffness", "N·m/rad", positive=True)

@@ -64,6 +64,7 @@ class ThreeSegmentHardening(Hardening):
     """
 
     id: ClassVar[str] = "three_segment"
+    other_forms: ClassVar[tuple[str, ...]] = ("tanh",)
     T1: float = param("first breakpoint torque", "N·m", positive=True)
     T2: float = param("second breakpoint torque", "N·m", positive=True)
     e2: float = param("engagement ratio between T1 and T2", "-", 1.0, 100.0)
@@ -119,6 +120,7 @@ class TanhHardening(Hardening):
     """
 
     id: ClassVar[str] = "tanh"
+    other_forms: ClassVar[tuple[str, ...]] = ("three_segment",)
     e_inf: float = param("engagement ratio at high load", "-", 1.0, 100.0)
     T_s: float = param("transition torque", "N·m", positive=True)
     #: range of K∞/K₀ a fit searches

@@ -1,0 +1,108 @@
+"""Other forms of a family (the diagnosis's proxy guard): the gradual dead zone, and
+models whose slots hold different effect classes evaluated in one call."""
+
+import numpy as np
+import pytest
+
+from hdsim.identification.fit import build_model
+from hdsim.identification.problem import Evaluator
+from hdsim.io.measurement import Measurement
+from hdsim.model import effects as fx
+from hdsim.simulation.quasistatic import locked_twist, stackable_groups
+
+K0 = 2.0e4  # N·m/rad
+GAP = 3.0e-4  # rad
+
+
+def test_the_gradual_dead_zone_at_the_fixed_rounding_is_the_dead_zone():
+    """The fitted rounding nests the fixed one: at 0.2 both forms give the same angle."""
+    T = np.linspace(-20.0, 20.0, 401)
+    fixed = fx.DeadZoneBacklash(gap=GAP).twist_at_torque(T, K0)
+    gradual = fx.make_effect("backlash", "gradual_dead_zone", gap=GAP, contact_rounding=0.2)
+    assert np.array_equal(gradual.twist_at_torque(T, K0), fixed)
+
+
+def test_a_sharp_gradual_dead_zone_is_the_ideal_gap():
+    """Closed form of the ideal dead zone: once in contact the angle is ±gap/2 whatever
+    the torque (the contact carries the rest); rounding 0.01 is within 1e-3 of it beyond
+    a torque of K₀·gap/4."""
+    T = np.array([-12.0, -5.0, -1.5, 1.5, 5.0, 12.0])  # |T| ≥ K0·GAP/4 = 1.5 N·m
+    sharp = fx.make_effect("backlash", "gradual_dead_zone", gap=GAP, contact_rounding=0.01)
+    np.testing.assert_allclose(sharp.twist_at_torque(T, K0), np.sign(T) * GAP / 2, rtol=1e-3)
+
+
+def test_a_wider_rounding_closes_the_gap_over_more_torque():
+    """At a torque of the order K₀·gap the angle reached is smaller the wider the rounding,
+    and every form approaches ±gap/2 at high torque."""
+    T = np.array([0.5 * K0 * GAP, 40.0 * K0 * GAP])
+    angles = [fx.make_effect("backlash", "gradual_dead_zone", gap=GAP, contact_rounding=r).twist_at_torque(T, K0)
+              for r in (0.05, 0.5, 2.0)]
+    assert angles[0][0] > angles[1][0] > angles[2][0] > 0.0
+    for a in angles:
+        assert a[1] == pytest.approx(GAP / 2, rel=2e-2)
+
+
+def test_models_split_into_groups_that_can_share_a_batch():
+    tanh = build_model(None, {"hardening": "tanh"})
+    segments = build_model(None, {"hardening": "three_segment"})
+    linear = build_model(None, {})
+    gradual = build_model(None, {"hardening": "tanh", "backlash": "gradual_dead_zone"})
+    fixed = build_model(None, {"backlash": "dead_zone"})
+    assert stackable_groups([tanh, segments, linear, gradual, fixed]) == [[0, 2, 3], [1, 4]]
+
+
+def test_the_evaluator_gives_each_model_its_own_twist_in_a_mixed_call():
+    """A call with different classes in one slot returns, row for row, what each model
+    gives alone (the rows are put back in their order), to within the Newton tolerance
+    (a batch iterates until its slowest row has converged, so rows may take one more step)."""
+    t = np.linspace(0.0, 4.0, 801)
+    T = 30.0 * np.sin(2 * np.pi * t / 2.0)
+    meas = Measurement(test="stiffness", time=t, torque=T, angle=np.zeros_like(t), source="synthetic")
+    models = [build_model(None, {"hardening": "tanh", "friction": "dahl"}),
+              build_model(None, {"hardening": "three_segment", "friction": "dahl"}),
+              build_model(None, {"backlash": "gradual_dead_zone"}),
+              build_model(None, {"hardening": "tanh", "backlash": "dead_zone"})]
+    together = Evaluator(meas).twist(models)
+    alone = np.vstack([locked_twist(m, t, T) for m in models])
+    np.testing.assert_allclose(together, alone, rtol=0, atol=1e-10)
+    assert np.ptp(together[1] - together[0]) > 1e-6  # the two hardening forms do differ
+
+
+# --------------------------------------------------------------------------- the guard (slow)
+# Records of the independent truth zoo (tests/truth_zoo.py) whose forms the library's
+# default laws do not match; before the guard, each had a proxy family added.
+
+
+def _zoo_diagnosis(tmp_path, hidden, baseline, profile, seed):
+    import truth_zoo as tz
+    from hdsim.identification.diagnosis import diagnose
+    from hdsim.io.measurement import load_measurement
+
+    cols, meta, truth = tz.make_case(hidden, baseline, profile, seed, max_rows=6000)
+    path = tmp_path / "zoo.csv"
+    tz.write_csv(path, cols, meta)
+    return diagnose(load_measurement(path), list(truth["baseline"]))
+
+
+@pytest.mark.slow
+def test_a_kinked_hardening_changes_form_instead_of_a_proxy_after_the_gap(tmp_path):
+    """A hard gap with contact compliance behind a piecewise-linear hardening: the smooth
+    hardening left a residual that damping absorbed after the backlash (added: backlash,
+    damping). The three segments explain it, and only the backlash is added."""
+    d = _zoo_diagnosis(tmp_path, {"backlash": "hard_gap"}, {"hardening": "piecewise"}, "unbalanced_rates", 9)
+    assert d.added == ["backlash"]
+    assert [(r["family"], r["to"]) for r in d.reshaped] == [("hardening", "three_segment")]
+    assert d.final.fit.rmse_rad < 0.6 * d.baseline.fit.rmse_rad
+
+
+@pytest.mark.slow
+def test_a_gap_that_closes_gradually_is_not_taken_for_damping(tmp_path):
+    """A gap closing over 2-6 % of the rated torque: the dead zone with its fixed rounding
+    left a residual that damping absorbed. The dead zone with a fitted rounding explains
+    it better, and no damping is added."""
+    d = _zoo_diagnosis(tmp_path, {"backlash": "closing_gap"}, {"hardening": "piecewise"}, "sine", 7)
+    assert d.added == ["backlash"]
+    assert [(r["family"], r["to"], r["instead_of"]) for r in d.reshaped] == [("backlash", "gradual_dead_zone",
+                                                                              "damping")]
+    rounding = d.final.fit.params["backlash.contact_rounding"]
+    assert rounding > 0.3  # wider than the fixed 0.2: the gap closes over a range of torque
