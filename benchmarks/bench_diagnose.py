@@ -7,11 +7,13 @@ Run::
 The file comes from ``tests/truth.py`` (independent truth: hardening hidden, Bouc–Wen
 friction in the baseline, two loading rates, encoder noise and quantisation). ``hdsim
 diagnose`` runs as a user would run it (a subprocess of the console entry point);
-``--max-rounds 2`` holds it to at most two rounds. Round 1 tries hardening, backlash and
+``--max-rounds 2`` holds it to at most two additions. Round 1 tries hardening, backlash and
 damping, each on all rows and on two hold-out folds, warm and fresh, in one lockstep
-(`hdsim.identification.optimizer.fit_many`); round 2 tries the two left and adds
-damping, a proxy for the Bouc–Wen loop shape that Dahl does not match (see the
-tutorial's "Known limitations").
+(`hdsim.identification.optimizer.fit_many`), and adds hardening after the friction in
+its other form (Maxwell-slip) failed to explain the residual; round 2 finds damping
+best, but the friction as Maxwell-slip elements explains the Bouc–Wen loop of the truth
+better, so the friction changes form instead of a damping proxy being added (the proxy
+guard, see the tutorial's "How it decides"); round 3 adds nothing.
 The target is 10 s on the project's 2-core machine; the JSON line says how far off it is.
 The cost is the quasi-static evaluator's loop over the samples, one pass per optimiser
 tick (``passes``): see "Speed" in ``docs/tutorial-find-missing-effect.md``.
