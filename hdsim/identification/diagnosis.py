@@ -3,13 +3,12 @@
 Procedure
 ---------
 1. Fit the baseline (the base model plus the families the user names) to all rows, and
-   to each of two *hold-out folds*: distinct experiments in the record (the loading-rate
-   blocks when the torque has more than one rate, else the first and second half of the
-   loading legs; for a kinematic-error test, alternate blocks of ten wave-generator
-   revolutions, so that each fold holds both load directions). A fold fit minimises the residual on its own rows only; the other
-   fold's rows are its hold-out.
-2. For every family not yet in the model, add its effect (the family's default effect, or the one named in ``candidates``)
-   and refit all rows and both folds, each from the baseline's values and afresh (the
+   to each of two *hold-out folds* (`hdsim.identification.folds`: whole torque cycles
+   alternated within each loading rate; for a kinematic-error test, alternate blocks of
+   ten wave-generator revolutions, so that each fold holds both load directions). A fold
+   fit minimises the residual on its own rows only; the other fold's rows are its hold-out.
+2. For every family not yet in the model, add its effect (the family's default effect,
+   or the one named in ``candidates``) and refit all rows and both folds, each from the baseline's values and afresh (the
    lower optimum counts). All the fits of a round run in lockstep in one batched pass per
    iteration (`hdsim.identification.fit.fit_many`): a pass costs about the same whatever
    it holds, so a round costs about as many passes as its slowest fit.
@@ -76,8 +75,8 @@ from hdsim.io.measurement import Measurement
 from hdsim.model.drive import SLOTS
 from hdsim.identification.confidence import diagnosis_confidence
 from hdsim.identification.folds import folds, one_loading_rate
-from hdsim.identification.selection import (HOLDOUT_GAIN, MIN_GAIN, SCORE_THRESHOLD, SEPARATING, TIE_FRACTION,
-                                            Candidate, rate_ambiguity, score_candidate, separating)
+from hdsim.identification.selection import (HOLDOUT_GAIN, MIN_GAIN, SCORE_THRESHOLD, SEPARATING, Candidate,
+                                            near_tie, rate_ambiguity, score_candidate, separating)
 from hdsim.identification.residuals import findings, whiteness
 
 __all__ = ["Diagnosis", "diagnose", "folds", "SEPARATING", "SCORE_THRESHOLD",
@@ -335,20 +334,15 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
             say(f"round {round_no}, other forms: " + ", ".join(f"{c.family}={c.effect} {c.score:.1f}"
                                                                 for c in step.reshapes))
             form = min(step.reshapes, key=lambda c: c.score)
-            tie = max(10.0, TIE_FRACTION * abs(best.score))
-            if form.accepted and abs(form.score - best.score) < tie:
+            if form.accepted and near_tie(best.score, form.score):
                 # too close to call: the family is added (a new effect is the more useful
                 # lead for the bench), the other form named with the separating measurement
-                ambiguous.append({"families": [best.family, form.family], "scores": [best.score, form.score],
-                                  "round": round_no, "other_form": {form.family: form.effect},
-                                  "measurement": separating(best.family, form.family), "added": True})
+                ambiguous.append(_tie_entry(best, form, round_no, other_form={form.family: form.effect}))
             elif form.accepted and form.score < best.score:
                 step.reshaped = {"family": form.family, "from": current[form.family], "to": form.effect,
                                  "score": form.score, "instead_of": best.family, "round": round_no}
                 reshaped.append(step.reshaped)
-                current[form.family] = form.effect
-                step = Step(effects=[f for f in SLOTS if f in current], fit=form.fit, fold_fits=form.fold_fits)
-                steps.append(step)
+                step = _advance(steps, current, form)
                 if whiteness(step.fit.residual)["explained"]:
                     break
                 continue
@@ -360,19 +354,11 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
             ambiguous.append({"families": pair, "scores": [by_family.get(f) for f in pair],
                               "round": round_no, "measurement": separating(*pair), "added": False})
             break
-        if len(passing) > 1:
-            second = passing[1]
-            tie = max(10.0, TIE_FRACTION * abs(best.score))
-            if second.score - best.score < tie:
-                ambiguous.append({"families": [best.family, second.family],
-                                  "scores": [best.score, second.score],
-                                  "round": round_no,
-                                  "measurement": separating(best.family, second.family), "added": True})
+        if len(passing) > 1 and near_tie(best.score, passing[1].score):
+            ambiguous.append(_tie_entry(best, passing[1], round_no))
         step.added = best.family
         added.append(best.family)
-        current[best.family] = best.effect
-        step = Step(effects=[f for f in SLOTS if f in current], fit=best.fit, fold_fits=best.fold_fits)
-        steps.append(step)
+        step = _advance(steps, current, best)
         if whiteness(step.fit.residual)["explained"]:
             break
     w = whiteness(step.fit.residual)
@@ -421,3 +407,18 @@ def _other_forms(current: dict, done: set) -> list:
         for other in fx.effect_class(family, effect_id).other_forms:
             trials.append((family, other, {**current, family: other}))
     return trials
+
+
+def _advance(steps: list, current: dict, chosen: Candidate) -> Step:
+    """Make ``chosen``'s model the current one: its family and effect enter ``current``,
+    its fits a new step."""
+    current[chosen.family] = chosen.effect
+    step = Step(effects=[f for f in SLOTS if f in current], fit=chosen.fit, fold_fits=chosen.fold_fits)
+    steps.append(step)
+    return step
+
+
+def _tie_entry(best: Candidate, rival: Candidate, round_no: int, **extra) -> dict:
+    """The ``ambiguous`` entry of a near-tie in which ``best`` is added."""
+    return {"families": [best.family, rival.family], "scores": [best.score, rival.score], "round": round_no,
+            "measurement": separating(best.family, rival.family), "added": True, **extra}

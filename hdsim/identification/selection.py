@@ -15,7 +15,7 @@ import numpy as np
 
 from hdsim.identification.fit import FitResult, effective_n
 
-__all__ = ["Candidate", "score_candidate", "rule", "rate_ambiguity", "explains_as_well", "separating",
+__all__ = ["Candidate", "score_candidate", "rule", "rate_ambiguity", "explains_as_well", "near_tie", "separating",
            "SEPARATING", "SCORE_THRESHOLD", "HOLDOUT_GAIN", "MIN_GAIN", "TIE_FRACTION",
            "STRONG_HOLDOUT_GAIN", "SHAPE_MARGIN", "RATE_PAIR"]
 
@@ -124,6 +124,11 @@ def rate_ambiguity(best: Candidate, scored: list, current: dict):
     if rival is None or not explains_as_well(best.score, rival.score):
         return None
     return sorted(RATE_PAIR)
+
+
+def near_tie(best_score: float, rival_score: float) -> bool:
+    """The rival's score within max(10, ``TIE_FRACTION``·|best|) of the best's, either side."""
+    return abs(rival_score - best_score) < max(10.0, TIE_FRACTION * abs(best_score))
 
 
 def explains_as_well(best_score, rival_score):
