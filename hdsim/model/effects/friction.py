@@ -324,9 +324,26 @@ class MaxwellSlip(Friction):
     def path_tangent(self, states, direction, spring_torque, spring_tangent):
         states = _states(states)
         k, f = self._elements(states)
+        return spring_tangent + self._pushed_stiffness(states, direction, k, f)
+
+    @staticmethod
+    def _pushed_stiffness(states, direction, k, f):
+        """Stiffness of the elements that still deflect when the body moves in ``direction``."""
         with np.errstate(divide="ignore", invalid="ignore"):
             pushed = np.where(direction * states * k >= f * (1.0 - 1e-9), 0.0, 1.0)
-        return spring_tangent + np.sum(k * pushed, axis=0)
+        return np.sum(k * pushed, axis=0)
+
+    def quasistatic(self, states, start, end, spring):
+        # the generic step (advance, body torque, path tangent) with the elements built
+        # once: the evaluator calls this for every Newton iteration of every sample
+        states = _states(states)
+        k, f = self._elements(states)
+        with np.errstate(divide="ignore"):
+            reach = f / k
+        new = np.clip(states + (np.asarray(end, dtype=float) - start), -reach, reach)
+        u, tangent = spring(end)
+        pushed = self._pushed_stiffness(new, np.copysign(1.0, end - start), k, f)
+        return u + fr.maxwell_slip_torque(new, k), tangent + pushed, new, u, tangent
 
     def free_parameters(self, context: FitContext):
         t = context.max_torque
