@@ -291,13 +291,22 @@ class MaxwellSlip(Friction):
     slip_torque_max: float = param("largest element slip torque", "N·m", positive=True)
     velocity_scale: float = param("direction switch smoothing", "rad/s", 0.0, 1.0, positive=True)
 
+    @cached_property
+    def _columns(self):
+        """(stiffnesses, slip torques) of the elements, shape (n, M), computed once: the
+        quasi-static loop asks for them at every Newton iteration of every sample."""
+        n = self.n_elements
+        return (np.ones(n)[:, None] * np.atleast_1d(self.k_total) / n,
+                np.arange(1, n + 1)[:, None] / n * np.atleast_1d(self.slip_torque_max))
+
     def _elements(self, states):
         """Element stiffnesses and slip torques shaped to broadcast against ``states``
         (element axis first, the sample axis last)."""
-        n = self.n_elements
-        shape = (n,) + (1,) * (np.ndim(states) - 2) + (-1,)
-        k = (np.ones(n)[:, None] * np.atleast_1d(self.k_total) / n).reshape(shape)
-        f = (np.arange(1, n + 1)[:, None] / n * np.atleast_1d(self.slip_torque_max)).reshape(shape)
+        k, f = self._columns
+        if np.ndim(states) == 2:  # (n, M): the columns as they are
+            return k, f
+        shape = (self.n_elements,) + (1,) * (np.ndim(states) - 2) + (-1,)
+        k, f = k.reshape(shape), f.reshape(shape)
         return k, f
 
     def parallel_torque(self, states):
