@@ -296,27 +296,27 @@ class MaxwellSlip(Friction):
         """(stiffnesses, slip torques) of the elements, shape (n, M), computed once: the
         quasi-static loop asks for them at every Newton iteration of every sample."""
         n = self.n_elements
-        return (np.ones(n)[:, None] * np.atleast_1d(self.k_total) / n,
-                np.arange(1, n + 1)[:, None] / n * np.atleast_1d(self.slip_torque_max))
+        k = np.ones(n)[:, None] * np.atleast_1d(self.k_total) / n
+        f = np.arange(1, n + 1)[:, None] / n * np.atleast_1d(self.slip_torque_max)
+        with np.errstate(divide="ignore"):
+            return k, f, f / k  # the last: each element's reach, f_i/k_i [rad]
 
     def _elements(self, states):
-        """Element stiffnesses and slip torques shaped to broadcast against ``states``
-        (element axis first, the sample axis last)."""
-        k, f = self._columns
+        """Element stiffnesses, slip torques and reaches shaped to broadcast against
+        ``states`` (element axis first, the sample axis last)."""
         if np.ndim(states) == 2:  # (n, M): the columns as they are
-            return k, f
+            return self._columns
         shape = (self.n_elements,) + (1,) * (np.ndim(states) - 2) + (-1,)
-        k, f = k.reshape(shape), f.reshape(shape)
-        return k, f
+        return tuple(c.reshape(shape) for c in self._columns)
 
     def parallel_torque(self, states):
         states = _states(states)
-        k, _ = self._elements(states)
+        k, _, _ = self._elements(states)
         return fr.maxwell_slip_torque(states, k)
 
     def rates(self, states, body_rate, spring_torque, spring_tangent):
         states = _states(states)
-        k, f = self._elements(states)
+        k, f, _ = self._elements(states)
         return tuple(fr.maxwell_slip_rates(states, body_rate, k, f, self.velocity_scale))
 
     def memory_torque(self):
@@ -325,14 +325,12 @@ class MaxwellSlip(Friction):
     def advance(self, states, start, end, spring):
         # exact elasto-plastic elements: deflect with the body, stop at f_i/k_i
         states = _states(states)
-        k, f = self._elements(states)
-        with np.errstate(divide="ignore"):
-            reach = f / k
+        _, _, reach = self._elements(states)
         return np.clip(states + (np.asarray(end, dtype=float) - start), -reach, reach)
 
     def path_tangent(self, states, direction, spring_torque, spring_tangent):
         states = _states(states)
-        k, f = self._elements(states)
+        k, f, _ = self._elements(states)
         return spring_tangent + self._pushed_stiffness(states, direction, k, f)
 
     @staticmethod
@@ -343,13 +341,10 @@ class MaxwellSlip(Friction):
         return np.sum(k * pushed, axis=0)
 
     def quasistatic(self, states, start, end, spring):
-        # the generic step (advance, body torque, path tangent) with the elements built
-        # once: the evaluator calls this for every Newton iteration of every sample
-        states = _states(states)
-        k, f = self._elements(states)
-        with np.errstate(divide="ignore"):
-            reach = f / k
-        new = np.clip(states + (np.asarray(end, dtype=float) - start), -reach, reach)
+        # the generic step (advance, body torque, path tangent) in one call: the
+        # evaluator calls this for every Newton iteration of every sample
+        new = self.advance(states, start, end, spring)
+        k, f, _ = self._elements(new)
         u, tangent = spring(end)
         pushed = self._pushed_stiffness(new, np.copysign(1.0, end - start), k, f)
         return u + fr.maxwell_slip_torque(new, k), tangent + pushed, new, u, tangent
