@@ -107,8 +107,8 @@ def _print(s) -> None:
               f"  {c['why']}")
     print(f"added: {', '.join(s['added']) or 'nothing'}")
     for r in s.get("reshaped", []):
-        print(f"other form: {r['family']} as {r['to']} instead of {r['from']} explains the residual better "
-              f"than adding {r['instead_of']} (score {r['score']:.1f})")
+        print(f"other form: {r['family']} as {r['to']} instead of {r['from']} (round {r['round']}: it explained "
+              f"the residual better than adding {r['instead_of']}, score {r['score']:.1f})")
     inclusion = (s.get("confidence") or {}).get("inclusion")
     if inclusion:
         print("how sure (share of block-bootstrap resamples that add it): "

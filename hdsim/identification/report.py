@@ -294,9 +294,9 @@ def _ambiguity_text(a: dict) -> str:
 
 
 def _reshape_text(r: dict) -> str:
-    return (f"round {r['round']}: {r['family']} as {r['to']} instead of {r['from']} explains the residual "
-            f"better (score {r['score']:.1f}) than adding {r['instead_of']}, which was then not needed: the "
-            f"residual was the shape of the {r['family']}, not a missing effect")
+    return (f"round {r['round']}: {r['family']} as {r['to']} instead of {r['from']} explained the residual "
+            f"better (score {r['score']:.1f}) than adding the round's best candidate, {r['instead_of']}: that "
+            f"part of the residual was the shape of the {r['family']}; the next round started from this form")
 
 
 def _confidence_intro(d: dict) -> str:
