@@ -198,20 +198,6 @@ def tanh_hardening_tangent(twist, K0, K_inf, twist_scale):
     return K_inf - (K_inf - K0) / np.cosh(twist / twist_scale) ** 2
 
 
-def tanh_hardening_torque_and_tangent(twist, K0, K_inf, twist_scale):
-    """`tanh_hardening_torque` and `tanh_hardening_tangent` together, the ratio ``φ/φ_s``
-    computed once (the quasi-static evaluator calls the pair at every Newton iteration).
-
-    Returns
-    -------
-    tuple
-        (torque [N·m], tangent stiffness [N·m/rad]).
-    """
-    ratio = twist / twist_scale
-    drop = K_inf - K0
-    return K_inf * twist - drop * twist_scale * np.tanh(ratio), K_inf - drop / np.cosh(ratio) ** 2
-
-
 def fit_three_segment(torque, twist, T1, T2):
     """Least-squares fit of the three-segment law with a free twist offset.
 

@@ -114,8 +114,7 @@ class DeadZoneBacklash(Backlash):
     stabilisation_time: ClassVar[float] = 1e-3
 
     def _width(self):
-        """Rounding width of the corners [rad] (never zero: the softplus needs a scale)."""
-        return self.contact_rounding * self.gap + 1e-12
+        return _rounding_width(self.contact_rounding, self.gap)
 
     def engage(self, twist):
         width = self._width()
@@ -206,10 +205,14 @@ class DeadZoneBacklash(Backlash):
         return cls(gap=1e-4)
 
 
+def _rounding_width(rounding, gap):
+    """Rounding width of the corners [rad] (never zero: the softplus needs a scale)."""
+    return rounding * gap + 1e-12
+
+
 def _twist_in_gap(contact_twist, gap, rounding):
     """Angle of the dead zone [rad] that carries the twist ``contact_twist`` of its contact."""
-    width = rounding * gap + 1e-12
-    return bl.inverse_smooth_dead_zone(contact_twist, 0.5 * gap, width) - contact_twist
+    return bl.inverse_smooth_dead_zone(contact_twist, 0.5 * gap, _rounding_width(rounding, gap)) - contact_twist
 
 
 @dataclass(frozen=True, eq=False)
@@ -228,7 +231,8 @@ class GradualDeadZone(DeadZoneBacklash):
     contact_rounding: float = param("width of the closing as a share of the gap", "-", 0.01, 10.0, default=0.2)
 
     def free_parameters(self, context: FitContext):
-        return super().free_parameters(context) + (FreeParameter("contact_rounding", 0.01, 10.0, 0.5),)
+        lower, upper = self.param_meta()["contact_rounding"]["bounds"]
+        return super().free_parameters(context) + (FreeParameter("contact_rounding", lower, upper, 0.5),)
 
     @classmethod
     def neutral(cls):

@@ -183,16 +183,12 @@ class _DahlLaw(Friction):
         return spring_tangent + fr.dahl_slope(states[0], direction, sigma, F)
 
     def quasistatic(self, states, start, end, spring):
-        # the generic step (advance, body torque, path tangent) with the exponential and
-        # the slope computed once: the evaluator calls this for every Newton iteration of
-        # every sample, where the cost is the number of numpy calls, not their size
-        decay, F = self._decay
-        step = end - start
-        target = np.copysign(F, step)
-        z = target - (target - states[0]) * np.exp(-decay * np.abs(step))
+        # the generic step without its layers (Dahl has no series slip, its torque is its
+        # state): the evaluator calls this for every Newton iteration of every sample,
+        # where the cost is the number of calls, not their size
+        new = self.advance(states, start, end, spring)
         u, k = spring(end)
-        slope = fr.dahl_slope(z, np.copysign(1.0, step), self._law()[0], F)
-        return u + z, k + slope, z[None], u, k
+        return u + new[0], self.path_tangent(new, np.copysign(1.0, end - start), u, k), new, u, k
 
 
 @dataclass(frozen=True, eq=False)
@@ -331,23 +327,9 @@ class MaxwellSlip(Friction):
     def path_tangent(self, states, direction, spring_torque, spring_tangent):
         states = _states(states)
         k, f, _ = self._elements(states)
-        return spring_tangent + self._pushed_stiffness(states, direction, k, f)
-
-    @staticmethod
-    def _pushed_stiffness(states, direction, k, f):
-        """Stiffness of the elements that still deflect when the body moves in ``direction``."""
         with np.errstate(divide="ignore", invalid="ignore"):
             pushed = np.where(direction * states * k >= f * (1.0 - 1e-9), 0.0, 1.0)
-        return np.sum(k * pushed, axis=0)
-
-    def quasistatic(self, states, start, end, spring):
-        # the generic step (advance, body torque, path tangent) in one call: the
-        # evaluator calls this for every Newton iteration of every sample
-        new = self.advance(states, start, end, spring)
-        k, f, _ = self._elements(new)
-        u, tangent = spring(end)
-        pushed = self._pushed_stiffness(new, np.copysign(1.0, end - start), k, f)
-        return u + fr.maxwell_slip_torque(new, k), tangent + pushed, new, u, tangent
+        return spring_tangent + np.sum(k * pushed, axis=0)
 
     def free_parameters(self, context: FitContext):
         t = context.max_torque

@@ -140,7 +140,7 @@ class TanhHardening(Hardening):
         args = self._k(c_struct, c_mesh)
         # far out on the law cosh overflows and the tangent tends to K∞ as it should; the
         # callers (solver, quasi-static evaluator) run under np.errstate(over="ignore")
-        return lambda twist: st.tanh_hardening_torque_and_tangent(twist, *args)
+        return lambda twist: (st.tanh_hardening_torque(twist, *args), st.tanh_hardening_tangent(twist, *args))
 
     def free_parameters(self, context: FitContext):
         return (FreeParameter("curvature", 0.0, np.inf, 3.0 / (0.6 * context.max_torque) ** 2),
