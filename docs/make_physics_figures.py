@@ -20,7 +20,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from hdsim.model.catalog import catalog_entry, load_unit, unit_names  # noqa: E402
-from hdsim.model.drive import compliance_chain  # noqa: E402
+from hdsim.model.drive import compliance_chain, radial_support  # noqa: E402
 from hdsim.physics import backlash as bl  # noqa: E402
 from hdsim.physics import compliance as cc  # noqa: E402
 from hdsim.physics import stiffness as st  # noqa: E402
@@ -75,14 +75,15 @@ def chain_tables():
               f"{raw:9.3g} {raw / r['K1']:7.2f} {r['K1']:8.3g}")
     m = load_unit()
     g, wg = m.geometry, m.wave_generator
-    zone_arc = wg.engagement_fraction * 2.0 * np.pi * g.R_rim
-    pitch = 2.0 * np.pi * g.R_i / wg.balls
-    k_rim = cc.rim_between_balls_stiffness(g.h_pz, g.face_width, g.E, pitch, zone_arc)
-    k_cup = cc.shell_edge_radial_stiffness(g.R_c, g.h_c, g.E, g.nu, zone_arc)
-    k_r = 1.0 / (1.0 / k_rim + 1.0 / wg.k_bearing) + k_cup
-    print(f"\n== radial support of {m.name}: arc {zone_arc * 1e3:.2f} mm, ball pitch {pitch * 1e3:.2f} mm, "
-          f"k_rim {k_rim:.3g}, k_cup {k_cup:.3g}, k_bearing {wg.k_bearing:.3g}, k_r {k_r:.3g} N/m, "
-          f"C_mesh(kappa=1) {cc.mesh_zone(k_r, g.pitch_radius):.4g} rad/(N·m)")
+    support = radial_support(g, wg)
+    k_r = float(support.total)
+    print(f"\n== radial support of {m.name}: arc {support.zone_arc * 1e3:.2f} mm, ball pitch "
+          f"{support.ball_pitch * 1e3:.2f} mm, k_rim {support.rim:.3g}, k_cup {support.cup:.3g}, "
+          f"k_bearing {support.bearing:.3g}, k_r {k_r:.3g} N/m, C_mesh(kappa=1) "
+          f"{cc.mesh_zone(k_r, g.pitch_radius, g.pressure_angle):.4g} rad/(N·m)")
+    print("ball pitch [mm]: " + ", ".join(
+        f"{n} {radial_support(load_unit(n).geometry, load_unit(n).wave_generator).ball_pitch * 1e3:.2f}"
+        for n in unit_names()))
     print("\n== closed-form checks")
     print(f"thin tube R=20 mm, t=0.4 mm, L=30 mm, G=76.9 GPa: K = {1 / cc.thin_tube(0.03, 0.02, 0.4e-3, 76.9e9):.4g}"
           " N·m/rad (reference §4: about 5.2e4)")

@@ -72,6 +72,9 @@ def flexspline() -> None:
     plot_indices(FIGURES / "sobol_flexspline_indices.png", names, res.analysis,
                  title="CSG-25-100 lost motion, ±10 % flexspline dimensions, N = 1024")
     plot_convergence(FIGURES / "sobol_flexspline_convergence.png", names, res.convergence)
+    for key in ("S1", "ST"):
+        print(f"{key}: " + ", ".join(f"{n} {v:.3f}" for n, v in zip(names, res.analysis[key])))
+    print(f"{res.evaluations} simulations in {res.seconds:.1f} s")
 
 
 def main() -> None:

@@ -26,9 +26,24 @@ def test_annular_diaphragm_matches_radial_integration():
     assert cc.annular_diaphragm(ri, ro, t, G) == pytest.approx(integral, rel=1e-9)
 
 
-def test_fillet_matches_quadrature_and_vanishes_with_radius():
+def test_fillet_matches_quadrature_along_its_arc_and_vanishes_with_radius():
+    """The arc tangent to the diaphragm (z = 0) and to the cylinder (r = R_c), written here
+    as points (r, z) with its length element from their derivatives."""
     Rk, Rc, t = 3e-3, 30e-3, 0.7e-3
-    integral, _ = quad(lambda a: Rk / (2 * np.pi * G * t * (Rc - Rk * np.cos(a)) ** 3), 0, np.pi / 2)
+    centre_r, centre_z = Rc - Rk, Rk
+
+    def point(b):  # b from 0 (on the diaphragm) to π/2 (on the cylinder)
+        return centre_r + Rk * np.sin(b), centre_z - Rk * np.cos(b)
+
+    r0, z0 = point(0.0)
+    r1, z1 = point(np.pi / 2)
+    assert (r0, z0) == pytest.approx((Rc - Rk, 0.0)) and (r1, z1) == pytest.approx((Rc, Rk))
+
+    def element(b):
+        dr, dz = Rk * np.cos(b), Rk * np.sin(b)
+        return np.hypot(dr, dz) / (2 * np.pi * G * t * point(b)[0] ** 3)
+
+    integral, _ = quad(element, 0, np.pi / 2)
     assert cc.toroidal_fillet(Rk, Rc, t, G) == pytest.approx(integral, rel=1e-9)
     assert cc.toroidal_fillet(1e-9, Rc, t, G) < 1e-6 * integral
 
@@ -119,3 +134,96 @@ def test_size_number_is_pitch_diameter_in_tenths_of_an_inch():
 def test_out_of_range_unit_data_is_refused_by_name(name, value):
     with pytest.raises(InputError, match=name.replace(".", r"\.")):
         load_unit().with_updates({name: value})
+
+
+# ----------------------------------------------------------------------- mesh zone and size
+
+
+def test_mesh_zone_is_tan_squared_over_the_radial_support():
+    """The mesh zone from a contact model solved here as a constrained minimum: a tooth on
+    a radial spring k_r, free tangentially, pressed by a tangential force F_t against a
+    fixed flank at pressure angle α. The flank forbids motion along its normal,
+    u_t cos α + u_r sin α = 0 (u_r outward), so advancing means retreating inwards.
+    Minimising ½ k_r u_r² − F_t u_t on that constraint (Lagrange multiplier) gives the
+    tangential give; the twist is u_t / r_p with F_t = T / (2 r_p) in each of two zones."""
+    k_r, r_p, T = 6e7, 0.032, 10.0
+    for alpha in np.radians([14.5, 20.0, 30.0]):
+        F_t = T / (2 * r_p)
+        normal = np.array([np.cos(alpha), np.sin(alpha)])  # (tangential, radial) components
+        # unknowns (u_t, u_r, λ): stationarity of the Lagrangian, then the constraint
+        A = np.array([[0.0, 0.0, normal[0]], [0.0, k_r, normal[1]], [normal[0], normal[1], 0.0]])
+        u_t, u_r, _ = np.linalg.solve(A, [F_t, 0.0, 0.0])
+        assert u_t > 0 and u_r < 0  # the tooth advances and the rim is pushed in
+        assert -k_r * u_r == pytest.approx(F_t * np.tan(alpha), rel=1e-12)  # the flank's radial push
+        assert cc.mesh_zone(k_r, r_p, alpha) == pytest.approx((u_t / r_p) / T, rel=1e-12)
+
+
+def test_mesh_zone_grows_with_the_pressure_angle():
+    base = load_unit()
+    steeper = base.with_updates({"flexspline.pressure_angle": np.radians(25.0)})
+    ratio = float(steeper.compliance().mesh_zone / base.compliance().mesh_zone)
+    assert ratio == pytest.approx((np.tan(np.radians(25.0)) / np.tan(np.radians(20.0))) ** 2, rel=1e-12)
+
+
+def test_pressure_angle_of_45_degrees_or_more_is_refused():
+    with pytest.raises(InputError, match="pressure angle"):
+        load_unit().with_updates({"flexspline.pressure_angle": 50.0})  # degrees given as radians
+
+
+def test_every_term_of_the_chain_follows_similitude():
+    """Scaling every length by s (geometry and wave generator; the bearing stiffness, a
+    force per length, by s) scales every torsional compliance by s⁻³ exactly."""
+    from dataclasses import fields
+
+    from hdsim.model.catalog import nominal_wave_generator
+    from hdsim.model.drive import WaveGenerator, compliance_chain
+
+    s = 1.7
+    g = load_unit("CSG-20-100").geometry
+    wg = nominal_wave_generator(20)
+    dimensionless = {"teeth", "E", "nu", "pressure_angle"}
+    big = g.replace(**{f.name: s * getattr(g, f.name) for f in fields(g) if f.name not in dimensionless})
+    big_wg = WaveGenerator(k_bearing=s * wg.k_bearing, balls=wg.balls, support_width=s * wg.support_width,
+                           engagement_fraction=wg.engagement_fraction)
+    small, large = compliance_chain(g, wg).as_dict(), compliance_chain(big, big_wg).as_dict()
+    for name in small:
+        assert float(large[name]) == pytest.approx(float(small[name]) / s**3, rel=1e-9), name
+
+
+def test_calibration_factor_is_nearly_the_same_for_every_size():
+    """The catalog K1 grows as size³ (K1/size³ = 1.7–2.0 N·m/rad over sizes 14–32), and so
+    does the chain: the factor that closes the gap must not drift with size."""
+    kappas = [load_unit(name).calibration.kappa_mesh for name in unit_names()]
+    assert max(kappas) / min(kappas) <= 1.5
+
+
+def test_ball_pitch_is_the_angular_pitch_along_the_bore():
+    model = load_unit()
+    wg, g = model.wave_generator, model.geometry
+    assert float(wg.ball_pitch(g.R_i)) == pytest.approx(2 * np.pi * g.R_i / wg.balls, rel=1e-12)
+
+
+def test_support_wider_than_the_ball_pitch_is_refused():
+    model = load_unit()
+    pitch = 2 * np.pi * model.geometry.R_i / model.wave_generator.balls
+    with pytest.raises(InputError, match="support_width"):
+        model.with_updates({"wave_generator.support_width": 1.01 * pitch}).compliance()
+
+
+def test_rim_on_the_balls_is_a_clamped_timoshenko_span():
+    """Written out here: mean deflection of a fixed-fixed span under a uniform load q,
+    bending q L⁴/(720 E I) (from w = q x² (L − x)² / (24 E I)) plus shear q L²/(12 κ G A)
+    (from w = q x (L − x) / (2 κ G A)), both averaged over the span numerically."""
+    h, b, E, nu, p, w_c, a = 1.0e-3, 10e-3, 210e9, 0.3, 8.7e-3, 1.6e-3, 29e-3
+    L = p - w_c + 0.8 * h
+    x = np.linspace(0.0, L, 200001)
+    q = 1.0
+    I, A, G = b * h**3 / 12, b * h, E / (2 * (1 + nu))
+    w = q * x**2 * (L - x) ** 2 / (24 * E * I) + q * x * (L - x) / (2 * (5 / 6) * G * A)
+    k = q * a / np.trapezoid(w, x) * L
+    assert cc.rim_between_balls_stiffness(h, b, E, nu, p, w_c, a) == pytest.approx(k, rel=1e-8)
+
+
+def test_tooth_root_sits_one_and_a_quarter_modules_inside_the_pitch_circle():
+    g = nominal_geometry(25, 100)
+    assert g.pitch_radius - (g.R_i + g.h_pz) == pytest.approx(1.25 * g.module, rel=1e-12)

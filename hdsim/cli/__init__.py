@@ -16,7 +16,7 @@ import sys
 
 from hdsim.errors import InputError, SolverError
 
-VERBS = ("demo", "units", "simulate", "sobol", "fit", "diagnose")
+VERBS = ("demo", "units", "simulate", "compliance", "sobol", "fit", "diagnose")
 
 
 def build_parser() -> argparse.ArgumentParser:

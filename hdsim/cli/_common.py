@@ -44,15 +44,15 @@ def _number(name, text) -> float:
     return value
 
 
-def apply_sets(model: HarmonicDrive, scenario: Scenario, sets: dict[str, str]):
+def apply_sets(model: HarmonicDrive, scenario: Scenario | None, sets: dict[str, str]):
     """The model and scenario with the ``--set`` changes applied; every name is checked first.
 
     Parameters
     ----------
     model : HarmonicDrive
         The unit.
-    scenario : Scenario
-        The scenario.
+    scenario : Scenario or None
+        The scenario (None for a command that runs none: a ``scenario.`` name is refused).
     sets : dict
         ``{name: text}``: a dotted parameter (SI), an effect family set to ``none``, or
         ``scenario.TABLE.KEY``.
@@ -66,6 +66,8 @@ def apply_sets(model: HarmonicDrive, scenario: Scenario, sets: dict[str, str]):
     known = model.params()
     for name, text in sets.items():
         if name.startswith("scenario."):
+            if scenario is None:
+                raise InputError(f"--set {name}: this command runs no scenario")
             scenario_updates[name[len("scenario."):]] = text
         elif name in FAMILIES:
             if text != "none":

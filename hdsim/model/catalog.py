@@ -22,7 +22,7 @@ import numpy as np
 
 from hdsim.model import effects as fx
 from hdsim.errors import InputError, unknown_name
-from hdsim.model.geometry import FlexsplineGeometry
+from hdsim.model.geometry import DEDENDUM_MODULES, FlexsplineGeometry
 from hdsim.model.drive import Calibration, DriveData, HarmonicDrive, WaveGenerator, compliance_chain
 from hdsim.units import arcmin_to_rad
 
@@ -105,9 +105,32 @@ def nominal_geometry(size: float, ratio: float) -> FlexsplineGeometry:
     h_pz = p["h_pz"] * d
     return FlexsplineGeometry(
         h_pz=h_pz, h_c=p["h_c"] * d, R_v=p["R_v"] * d, R_k=p["R_k"] * d, h_p=p["h_p"] * d,
-        R_i=0.5 * d - module - h_pz, face_width=p["face_width"] * d, cup_length=p["cup_length"] * d,
-        undercut_width=p["undercut_width"] * d, t_d=p["t_d"] * d, r_hub=p["r_hub"] * d,
-        module=module, teeth=teeth, E=data["material"]["E"], nu=data["material"]["nu"])
+        R_i=0.5 * d - DEDENDUM_MODULES * module - h_pz, face_width=p["face_width"] * d,
+        cup_length=p["cup_length"] * d, undercut_width=p["undercut_width"] * d, t_d=p["t_d"] * d,
+        r_hub=p["r_hub"] * d, module=module, teeth=teeth,
+        pressure_angle=np.radians(data["gearing"]["pressure_angle_deg"]),
+        E=data["material"]["E"], nu=data["material"]["nu"])
+
+
+def nominal_wave_generator(size: float) -> WaveGenerator:
+    """Wave generator of a catalog size, geometrically similar to the size-25 one.
+
+    Parameters
+    ----------
+    size : float
+        Catalog size, e.g. 25 [-].
+
+    Returns
+    -------
+    WaveGenerator
+        Ball count as at size 25; support width and bearing stiffness in proportion to
+        the size (``[wave_generator]`` in hdsim/data/units.toml).
+    """
+    wg = _data()["wave_generator"]
+    d = size * 2.54e-3  # pitch diameter [m]
+    return WaveGenerator(k_bearing=wg["k_bearing_size25"] * size / 25.0, balls=float(wg["balls"]),
+                         support_width=wg["support_width"] * d,
+                         engagement_fraction=wg["engagement_fraction"])
 
 
 def calibrate(geometry, wave_generator, K1, K2, K3):
@@ -209,10 +232,7 @@ def assemble_unit(name: str, size: float, entry: dict, *, accuracy_arcmin: float
     data = _data()
     ratio = entry["ratio"]
     scale = size / 25.0
-    wg_data = data["wave_generator"]
-    wave_generator = WaveGenerator(k_bearing=wg_data["k_bearing_size25"] * scale,
-                                   balls=float(round(wg_data["balls_per_size"] * size)),
-                                   engagement_fraction=wg_data["engagement_fraction"])
+    wave_generator = nominal_wave_generator(size)
     if geometry is None:
         geometry = nominal_geometry(size, ratio)
     kappa, e2, e3 = calibrate(geometry, wave_generator, entry["K1"], entry["K2"], entry["K3"])

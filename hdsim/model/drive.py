@@ -28,11 +28,22 @@ class WaveGenerator(Parameters):
     """Wave generator data that set the radial support of the teeth."""
 
     k_bearing: float = param("radial stiffness of the WG bearing per engagement zone", "N/m",
-                                positive=True)
+                             positive=True)
     balls: float = param("ball count of the WG bearing", "-", 3, 200)
+    support_width: float = param("arc of the bore each ball holds through the bearing's outer race", "m",
+                                 positive=True)
     engagement_fraction: float = param(
         "circumference share of one engagement zone at light load", "-", 0.01, 0.5)
+
     prefix: ClassVar[str] = "wave_generator"
+
+    def ball_pitch(self, bore_radius):
+        """Distance between neighbouring balls along the flexspline bore [m].
+
+        The rim rests on the balls (through the outer race) at their angular pitch
+        ``2π/n_b``; the span it bridges is that angle times the bore radius.
+        """
+        return 2.0 * np.pi * bore_radius / self.balls
 
 
 @dataclass(frozen=True, eq=False)
@@ -60,7 +71,7 @@ class Calibration(Parameters):
     unit is built: a change of geometry acts through the closed forms, not through it.
     """
 
-    kappa_mesh: float = param("mesh-zone compliance factor", "-", 1e-3, 1e3)
+    kappa_mesh: float = param("mesh-zone compliance factor", "-", 1e-3, 1e5)
     prefix: ClassVar[str] = "calibration"
 
 
@@ -89,18 +100,41 @@ class ComplianceChain:
         return {f.name: getattr(self, f.name) for f in fields(self)}
 
 
+@dataclass(frozen=True)
+class RadialSupport:
+    """Radial stiffness of the teeth's support over one engagement zone [N/m] and the
+    lengths it follows from [m] (`radial_support`)."""
+
+    zone_arc: np.ndarray
+    ball_pitch: np.ndarray
+    rim: np.ndarray
+    bearing: np.ndarray
+    cup: np.ndarray
+
+    @property
+    def total(self):
+        """Rim spanning the balls in series with the bearing, in parallel with the cup wall."""
+        return 1.0 / (1.0 / self.rim + 1.0 / self.bearing) + self.cup
+
+
+def radial_support(g: FlexsplineGeometry, wg: WaveGenerator) -> RadialSupport:
+    """The three radial supports of the teeth for geometry ``g`` (docs/physics.md §3.5)."""
+    zone_arc = wg.engagement_fraction * 2.0 * np.pi * g.R_rim
+    pitch = wg.ball_pitch(g.R_i)
+    if np.any(wg.support_width >= pitch):
+        raise InputError(f"wave_generator.support_width ({np.max(wg.support_width) * 1e3:.4g} mm) must be "
+                         f"shorter than the ball pitch along the bore ({np.min(pitch) * 1e3:.4g} mm)")
+    rim = cc.rim_between_balls_stiffness(g.h_pz, g.face_width, g.E, g.nu, pitch, wg.support_width, zone_arc)
+    return RadialSupport(zone_arc=zone_arc, ball_pitch=pitch, rim=rim,
+                         bearing=np.asarray(wg.k_bearing, dtype=float),
+                         cup=cc.shell_edge_radial_stiffness(g.R_c, g.h_c, g.E, g.nu, zone_arc))
+
+
 def compliance_chain(g: FlexsplineGeometry, wg: WaveGenerator, kappa_mesh=1.0) -> ComplianceChain:
     """The series chain of closed forms for geometry ``g`` (see `hdsim.physics.compliance`)."""
     G = g.G
     fillet_wall = 0.5 * (g.t_d + g.h_c)
     undercut_wall = g.h_pz - g.h_p
-    zone_arc = wg.engagement_fraction * 2.0 * np.pi * g.R_rim
-    ball_pitch = 2.0 * np.pi * g.R_i / wg.balls
-    # Radial support of the teeth: rim spanning the balls in series with the bearing,
-    # in parallel with the cup wall holding the rim's edge.
-    k_rim = cc.rim_between_balls_stiffness(g.h_pz, g.face_width, g.E, ball_pitch, zone_arc)
-    k_cup = cc.shell_edge_radial_stiffness(g.R_c, g.h_c, g.E, g.nu, zone_arc)
-    k_radial = 1.0 / (1.0 / k_rim + 1.0 / wg.k_bearing) + k_cup
     return ComplianceChain(
         diaphragm=cc.annular_diaphragm(g.r_hub, g.R_c - g.R_k, g.t_d, G),
         end_radius=cc.toroidal_fillet(g.R_k, g.R_c, fillet_wall, G),
@@ -109,7 +143,7 @@ def compliance_chain(g: FlexsplineGeometry, wg: WaveGenerator, kappa_mesh=1.0) -
         undercut=cc.thin_tube(g.undercut_width, g.R_i + 0.5 * undercut_wall, undercut_wall, G),
         # torque enters the rim evenly over the face width: effective length b/2
         rim=cc.thin_tube(0.5 * g.face_width, g.R_rim, g.h_pz, G),
-        mesh_zone=kappa_mesh * cc.mesh_zone(k_radial, g.pitch_radius),
+        mesh_zone=kappa_mesh * cc.mesh_zone(radial_support(g, wg).total, g.pitch_radius, g.pressure_angle),
     )
 
 

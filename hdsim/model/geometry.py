@@ -11,7 +11,8 @@ Layout along the cup axis, from the bottom (hub) to the open end::
 
 The bore radius ``R_i`` is set by the wave generator and does not change with the
 wall thicknesses; the tooth root sits at ``R_i + h_pz`` and the pitch circle one
-dedendum (taken as one module) further out.
+dedendum (`DEDENDUM_MODULES` = 1.25 modules, the usual full-depth proportion)
+further out.
 """
 
 from __future__ import annotations
@@ -21,6 +22,10 @@ from dataclasses import dataclass, field, fields, replace
 import numpy as np
 
 from hdsim.errors import InputError
+
+#: dedendum of the flexspline teeth in modules: the usual full-depth proportion
+#: (addendum 1 m, dedendum 1.25 m), which leaves a root clearance of 0.25 m
+DEDENDUM_MODULES = 1.25
 
 
 def _dim(doc: str, unit: str = "m", symbol: str = "", design: bool = False):
@@ -44,6 +49,7 @@ class FlexsplineGeometry:
     r_hub: float = _dim("outer radius of the rigid hub (inner edge of the diaphragm)")
     module: float = _dim("gear module m")
     teeth: float = _dim("flexspline tooth count z_fs", unit="-")
+    pressure_angle: float = _dim("pressure angle of the tooth flanks α", unit="rad")
     E: float = _dim("Young's modulus", unit="Pa")
     nu: float = _dim("Poisson's ratio", unit="-")
 
@@ -69,8 +75,8 @@ class FlexsplineGeometry:
 
     @property
     def pitch_radius(self):
-        """Pitch radius, one dedendum (= module) beyond the tooth root [m]."""
-        return self.R_i + self.h_pz + self.module
+        """Pitch radius, one dedendum (1.25 modules) beyond the tooth root [m]."""
+        return self.R_i + self.h_pz + DEDENDUM_MODULES * self.module
 
     @property
     def cylinder_length(self):
@@ -130,6 +136,11 @@ def _first_bad(condition) -> int | None:
     return int(np.flatnonzero(bad)[0])
 
 
+def _at(x, i: int) -> float:
+    """Sample ``i`` of a field that may be a scalar or a batch."""
+    return float(np.atleast_1d(x)[min(i, np.size(x) - 1)])
+
+
 def _fail(message: str, index: int | None, batched: bool) -> None:
     where = f" (sample {index})" if batched else ""
     raise InputError(f"flexspline geometry{where}: {message}")
@@ -147,9 +158,9 @@ def validate_geometry(g: FlexsplineGeometry) -> None:
     ------
     InputError
         Naming the first offending sample of a batch, for: a field that is not a positive
-        finite number, an undercut deeper than the rim wall, ν ≥ 0.5, walls thicker than
-        10 % of the bore radius, an end radius that does not fit between hub and
-        cylinder, or no plain cylinder left in the cup.
+        finite number, an undercut deeper than the rim wall, ν ≥ 0.5, a pressure angle
+        of 45° or more, walls thicker than 10 % of the bore radius, an end radius that
+        does not fit between hub and cylinder, or no plain cylinder left in the cup.
     """
     values = {}
     for f in fields(g):
@@ -170,13 +181,15 @@ def validate_geometry(g: FlexsplineGeometry) -> None:
             _fail(f"{name} must be a positive finite number, got {np.atleast_1d(v)[i]:g} {_unit(name)}",
                   i, batched)
     def fmt(x, i):
-        x = float(np.atleast_1d(x)[min(i, np.size(x) - 1)])
+        x = _at(x, i)
         return f"{x * 1e3:.4g} mm" if abs(x) < 1e300 else f"{x:.4g} m"  # 1e3·x would overflow (a warning)
 
     checks = [
         (g.h_p >= g.h_pz, lambda i: f"undercut depth h_p = {fmt(g.h_p, i)} must be less than the "
                                     f"thickness under the teeth h_pz = {fmt(g.h_pz, i)}"),
         (g.nu >= 0.5, lambda i: "Poisson's ratio must be below 0.5"),
+        (g.pressure_angle >= np.pi / 4,
+         lambda i: f"pressure angle {_at(g.pressure_angle, i):.4g} rad must be below 45° (0.785 rad)"),
         (np.maximum(g.h_pz, g.h_c) > 0.1 * g.R_i,
          lambda i: f"walls thicker than 10 % of the bore radius ({fmt(0.1 * g.R_i, i)}) break the "
                    "thin-shell assumption"),

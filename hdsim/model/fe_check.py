@@ -1,0 +1,101 @@
+"""The flexspline's compliance by segment, with a finite-element second opinion for the cup.
+
+`compliance_report` is what ``hdsim compliance`` prints: the closed-form chain of
+`hdsim.model.drive.compliance_chain` segment by segment, the cup (everything between
+the hub and the toothed rim) and, on request, the cup computed by finite elements on
+the flexspline's meridional section (`hdsim.physics.fe_cup`, needs scikit-fem: the
+``fe`` extra). See docs/physics.md, section 3.7.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hdsim.errors import InputError
+from hdsim.model.drive import HarmonicDrive
+from hdsim.model.geometry import FlexsplineGeometry
+
+#: the segments between the hub and the toothed rim, in the order the torque meets them
+CUP_SEGMENTS = ("diaphragm", "end_radius", "cylinder", "lead_radius", "undercut")
+
+
+def cup_section(g: FlexsplineGeometry) -> dict[str, float]:
+    """The dimensions the finite-element cup is meshed from [m, Pa] (one geometry, not a batch).
+
+    Parameters
+    ----------
+    g : FlexsplineGeometry
+        The geometry.
+
+    Returns
+    -------
+    dict
+        Keyword arguments of `hdsim.physics.fe_cup.cup_torsion_fe`.
+
+    Raises
+    ------
+    InputError
+        For a batch of geometries.
+    """
+    values = dict(r_hub=g.r_hub, t_d=g.t_d, R_k=g.R_k, R_i=g.R_i, h_c=g.h_c, h_pz=g.h_pz, h_p=g.h_p,
+                  R_v=g.R_v, cylinder_length=g.cylinder_length, undercut_width=g.undercut_width, G=g.G)
+    if any(np.ndim(v) for v in values.values()):
+        raise InputError("the finite-element cup takes one geometry, not a batch")
+    return {k: float(v) for k, v in values.items()}
+
+
+def fe_cup_compliance(g: FlexsplineGeometry, *, tolerance: float = 0.005):
+    """Torsional compliance of the cup by finite elements, refined until converged.
+
+    Parameters
+    ----------
+    g : FlexsplineGeometry
+        One geometry.
+    tolerance : float
+        Relative change between two refinements that counts as converged [-].
+
+    Returns
+    -------
+    hdsim.physics.fe_cup.FEResult
+        Compliance [rad/(N·m)], element count, solve time [s] and the last change.
+
+    Raises
+    ------
+    InputError
+        Without scikit-fem (install ``hdsim[fe]``), or for a batch of geometries.
+    """
+    from hdsim.physics.fe_cup import converged_cup_compliance
+
+    return converged_cup_compliance(**cup_section(g), tolerance=tolerance)
+
+
+def compliance_report(model: HarmonicDrive, *, fe: bool = False) -> dict:
+    """The torsional compliance of the flexspline by segment [rad/(N·m)].
+
+    Parameters
+    ----------
+    model : HarmonicDrive
+        One unit (its calibration is applied to the mesh zone).
+    fe : bool
+        Also compute the cup by finite elements (needs scikit-fem).
+
+    Returns
+    -------
+    dict
+        ``unit``; ``closed_form``: the segments, ``cup``, ``rim``, ``mesh_zone`` (calibrated)
+        and ``total``; ``calibration``: ``kappa_mesh``; with ``fe``, ``fe``: ``cup``,
+        ``elements``, ``seconds``, ``change`` (the last refinement's relative change) and
+        ``ratio`` (FE cup over closed-form cup).
+    """
+    chain = {k: float(np.asarray(v)) for k, v in model.compliance().as_dict().items()}
+    closed = {name: chain[name] for name in CUP_SEGMENTS}
+    closed["cup"] = sum(closed.values())
+    closed.update(rim=chain["rim"], mesh_zone=chain["mesh_zone"], total=sum(chain.values()))
+    report = {"unit": model.name, "closed_form": closed,
+              "calibration": {"kappa_mesh": float(np.asarray(model.calibration.kappa_mesh))}}
+    if fe:
+        result = fe_cup_compliance(model.geometry)
+        report["fe"] = {"cup": result.compliance, "elements": result.elements,
+                        "seconds": round(result.seconds, 3), "change": result.change,
+                        "ratio": result.compliance / closed["cup"]}
+    return report
