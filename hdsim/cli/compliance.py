@@ -16,12 +16,12 @@ def register(subparsers) -> None:
     p = subparsers.add_parser(
         "compliance", help="torsional compliance of the flexspline by segment",
         description="The torsional compliance of the flexspline by segment from the closed forms; "
-                    "with --fe, the cup also by finite elements on its meridional section "
+                    "with --fe, the cup and the rim on the balls also by finite elements "
                     "(needs scikit-fem: pip install 'hdsim[fe]').")
     p.add_argument("--unit", default=None,
                    help="built-in unit (default CSG-25-100; see 'hdsim units') or a drive file")
     p.add_argument("--fe", action="store_true",
-                   help="also compute the cup by finite elements (about a second)")
+                   help="also check the cup and the rim by finite elements (a few seconds)")
     p.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE",
                    help="change a parameter (SI units), e.g. flexspline.h_c=0.7e-3")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
@@ -48,4 +48,7 @@ def main(args) -> int:
         print(f"  cup by finite elements:  {fe['cup']:.4g} rad/(N·m), {fe['ratio']:.4f} × the closed form "
               f"({fe['elements']} elements, last refinement changed it by {100 * fe['change']:.2g} %, "
               f"{fe['seconds']:.2g} s)")
+        rim = fe["rim_radial"]
+        print(f"  rim on the balls, radial: {rim['fe']:.4g} N/m per zone by finite elements, "
+              f"{rim['ratio']:.4f} × the closed form ({rim['closed_form']:.4g} N/m)")
     return 0

@@ -2,9 +2,10 @@
 
 `compliance_report` is what ``hdsim compliance`` prints: the closed-form chain of
 `hdsim.model.drive.compliance_chain` segment by segment, the cup (everything between
-the hub and the toothed rim) and, on request, the cup computed by finite elements on
-the flexspline's meridional section (`hdsim.physics.fe_cup`, needs scikit-fem: the
-``fe`` extra). See docs/physics.md, section 3.7.
+the hub and the toothed rim) and, on request, two finite-element checks (scikit-fem,
+the ``fe`` extra): the cup in torsion on the flexspline's meridional section
+(`hdsim.physics.fe_cup`) and the rim's radial stiffness on the wave-generator balls
+(`hdsim.physics.fe_rim`). See docs/physics.md, section 3.7.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from hdsim.errors import InputError
-from hdsim.model.drive import HarmonicDrive
+from hdsim.model.drive import HarmonicDrive, radial_support
 from hdsim.model.geometry import FlexsplineGeometry
 
 #: the segments between the hub and the toothed rim, in the order the torque meets them
@@ -63,10 +64,49 @@ def fe_cup_compliance(g: FlexsplineGeometry, *, tolerance: float = 0.005):
     ------
     InputError
         Without scikit-fem (install ``hdsim[fe]``), or for a batch of geometries.
+    SolverError
+        If the compliance has not converged at the finest refinement.
     """
     from hdsim.physics.fe_cup import converged_cup_compliance
 
     return converged_cup_compliance(**cup_section(g), tolerance=tolerance)
+
+
+def fe_rim_stiffness(model: HarmonicDrive, *, refinement: float = 2.0) -> float:
+    """Radial stiffness of the rim on the balls per engagement zone by finite elements [N/m].
+
+    The mean of a ball on the zone centre and two balls straddling it (the wave
+    generator turns, so the balls pass every position), with the unit's support width;
+    refinement 2 reads about 1 % stiff (docs/physics.md §3.7).
+
+    Parameters
+    ----------
+    model : HarmonicDrive
+        One unit.
+    refinement : float
+        Mesh density factor of `hdsim.physics.fe_rim.rim_radial_stiffness_fe` [-].
+
+    Returns
+    -------
+    float
+        Stiffness [N/m], to compare with ``radial_support(...).rim``.
+
+    Raises
+    ------
+    InputError
+        Without scikit-fem, or for a batch of geometries.
+    """
+    from hdsim.physics.fe_rim import rim_radial_stiffness_fe
+
+    g, wg = model.geometry, model.wave_generator
+    values = dict(bore_radius=g.R_i, wall=g.h_pz, face_width=g.face_width, E=g.E, nu=g.nu,
+                  arc_length=radial_support(g, wg).zone_arc, contact_width=wg.support_width)
+    if any(np.ndim(v) for v in values.values()) or np.ndim(wg.balls):
+        raise InputError("the finite-element rim takes one geometry, not a batch")
+    args = {k: float(v) for k, v in values.items()}
+    args.update(balls=int(round(float(wg.balls))), refinement=refinement)
+    return float(np.mean([rim_radial_stiffness_fe(**args, ball_on_centre=centre).stiffness
+                          for centre in (True, False)]))
 
 
 def compliance_report(model: HarmonicDrive, *, fe: bool = False) -> dict:
@@ -84,8 +124,10 @@ def compliance_report(model: HarmonicDrive, *, fe: bool = False) -> dict:
     dict
         ``unit``; ``closed_form``: the segments, ``cup``, ``rim``, ``mesh_zone`` (calibrated)
         and ``total``; ``calibration``: ``kappa_mesh``; with ``fe``, ``fe``: ``cup``,
-        ``elements``, ``seconds``, ``change`` (the last refinement's relative change) and
-        ``ratio`` (FE cup over closed-form cup).
+        ``elements``, ``seconds``, ``change`` (the last refinement's relative change),
+        ``ratio`` (FE cup over closed-form cup) and ``rim_radial``: the rim's radial
+        stiffness per zone [N/m] by FE (``fe``) and closed form (``closed_form``) and
+        their ``ratio``.
     """
     chain = {k: float(np.asarray(v)) for k, v in model.compliance().as_dict().items()}
     closed = {name: chain[name] for name in CUP_SEGMENTS}
@@ -95,7 +137,10 @@ def compliance_report(model: HarmonicDrive, *, fe: bool = False) -> dict:
               "calibration": {"kappa_mesh": float(np.asarray(model.calibration.kappa_mesh))}}
     if fe:
         result = fe_cup_compliance(model.geometry)
+        rim_closed = float(np.asarray(radial_support(model.geometry, model.wave_generator).rim))
+        rim_fe = fe_rim_stiffness(model)
         report["fe"] = {"cup": result.compliance, "elements": result.elements,
                         "seconds": round(result.seconds, 3), "change": result.change,
-                        "ratio": result.compliance / closed["cup"]}
+                        "ratio": result.compliance / closed["cup"],
+                        "rim_radial": {"fe": rim_fe, "closed_form": rim_closed, "ratio": rim_fe / rim_closed}}
     return report
