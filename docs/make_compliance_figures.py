@@ -11,7 +11,6 @@ chain and the simply supported span used before the check.
 
 from __future__ import annotations
 
-import itertools
 from pathlib import Path
 
 import matplotlib
@@ -21,7 +20,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from hdsim.model.catalog import load_unit, unit_names  # noqa: E402
-from hdsim.model.fe_check import compliance_report  # noqa: E402
+from hdsim.model.fe_check import corner_shapes, fe_cup_check  # noqa: E402
 from hdsim.physics.compliance import rim_between_balls_stiffness  # noqa: E402
 from hdsim.physics.fe_rim import rim_radial_stiffness_fe  # noqa: E402
 
@@ -30,16 +29,11 @@ DESIGN = ("h_pz", "h_c", "R_v", "R_k", "h_p")
 
 
 def cup_ratios():
-    sizes = {name: compliance_report(load_unit(name), fe=True)["fe"] for name in unit_names()}
+    sizes = {name: fe_cup_check(load_unit(name)) for name in unit_names()}
     for name, fe in sizes.items():
         print(f"{name}: FE cup {fe['cup']:.5g} rad/(N·m), FE / closed form {fe['ratio']:.5f}, "
               f"{fe['elements']} elements, last refinement {100 * fe['change']:.3f} %, {fe['seconds']:.2f} s")
-    model = load_unit()
-    nominal = {name: model.params()[f"flexspline.{name}"] for name in DESIGN}
-    box = []
-    for corner in itertools.product((0.9, 1.1), repeat=len(DESIGN)):
-        shape = model.with_updates({f"flexspline.{k}": f * v for (k, v), f in zip(nominal.items(), corner)})
-        box.append(compliance_report(shape, fe=True)["fe"]["ratio"])
+    box = [fe_cup_check(shape)["ratio"] for shape in corner_shapes(load_unit(), DESIGN)]
     print(f"±10 % box, 32 corners: FE / closed form {min(box):.5f} – {max(box):.5f}")
     return {name: fe["ratio"] for name, fe in sizes.items()}, box
 

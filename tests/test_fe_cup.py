@@ -2,13 +2,13 @@
 
 The tube and the annular plate have exact solutions (ψ = z/L and ψ ∝ 1/r²), written out
 here rather than taken from the library. The cup is compared with the closed-form chain
-of `hdsim.physics.compliance` at the five built-in sizes and across the ±10 % box of the
-seed paper's five dimensions. scikit-fem is in the test extras: these tests run, never skip.
+of the model (`hdsim.model.drive.compliance_chain`) at the five built-in sizes and across
+the ±10 % box of the seed paper's five dimensions. scikit-fem is in the test extras:
+these tests run, never skip.
 """
 
 from __future__ import annotations
 
-import itertools
 import sys
 
 import numpy as np
@@ -16,28 +16,15 @@ import pytest
 
 from hdsim.errors import InputError
 from hdsim.model.catalog import load_unit, unit_names
-from hdsim.physics import compliance as cc
+from hdsim.model.fe_check import closed_form_cup, corner_shapes, cup_section
 from hdsim.physics import fe_cup
 
 G = 210e9 / 2.6
-NAMES = ("r_hub", "t_d", "R_k", "R_i", "h_c", "h_pz", "h_p", "R_v", "cylinder_length", "undercut_width", "G")
+DESIGN = ("h_pz", "h_c", "R_v", "R_k", "h_p")
 
 
 def _nominal(unit="CSG-25-100") -> dict:
-    g = load_unit(unit).geometry
-    return {name: float(getattr(g, name)) for name in NAMES}
-
-
-def _closed_terms(d) -> dict:
-    R_c = d["R_i"] + d["h_c"] / 2
-    h_u = d["h_pz"] - d["h_p"]
-    return {
-        "diaphragm": cc.annular_diaphragm(d["r_hub"], R_c - d["R_k"], d["t_d"], d["G"]),
-        "fillet": cc.toroidal_fillet(d["R_k"], R_c, (d["t_d"] + d["h_c"]) / 2, d["G"]),
-        "cylinder": cc.thin_tube(d["cylinder_length"], R_c, d["h_c"], d["G"]),
-        "lead": cc.wall_transition(d["R_v"], d["R_i"], d["h_c"], d["h_pz"], d["G"]),
-        "undercut": cc.thin_tube(d["undercut_width"], d["R_i"] + h_u / 2, h_u, d["G"]),
-    }
+    return cup_section(load_unit(unit).geometry)
 
 
 def test_tube_is_exact():
@@ -60,23 +47,19 @@ def test_annular_plate_converges_to_roark():
 
 @pytest.mark.parametrize("unit", unit_names())
 def test_cup_is_converged_and_agrees_with_the_closed_form_chain(unit):
-    d = _nominal(unit)
-    fe = fe_cup.converged_cup_compliance(**d)
+    model = load_unit(unit)
+    fe = fe_cup.converged_cup_compliance(**cup_section(model.geometry))
     assert fe.change < 0.005
     # measured 1.0001 for every size (scaled copies of one geometry); the fillet on the
     # mirror-image arc, 9 % off in that one term, made it 0.9947
-    assert fe.compliance / float(sum(_closed_terms(d).values())) == pytest.approx(1.0, abs=0.01)
+    assert fe.compliance / closed_form_cup(model) == pytest.approx(1.0, abs=0.01)
 
 
 def test_cup_agrees_with_the_closed_forms_across_the_seed_study_box():
     """Every corner of the ±10 % box of h_pz, h_c, R_v, R_k and h_p (32 shapes)."""
-    model = load_unit()
-    nominal = {name: model.params()[f"flexspline.{name}"] for name in ("h_pz", "h_c", "R_v", "R_k", "h_p")}
-    ratios = []
-    for corner in itertools.product((0.9, 1.1), repeat=len(nominal)):
-        shape = model.with_updates({f"flexspline.{k}": f * v for (k, v), f in zip(nominal.items(), corner)})
-        d = {name: float(getattr(shape.geometry, name)) for name in NAMES}
-        ratios.append(fe_cup.cup_torsion_fe(**d).compliance / float(sum(_closed_terms(d).values())))
+    ratios = [fe_cup.cup_torsion_fe(**cup_section(shape.geometry)).compliance / closed_form_cup(shape)
+              for shape in corner_shapes(load_unit(), DESIGN)]
+    assert len(ratios) == 32
     assert max(abs(r - 1.0) for r in ratios) < 0.01, ratios
 
 

@@ -17,8 +17,9 @@ import pytest
 
 from hdsim.errors import InputError
 from hdsim.model.catalog import load_unit
+from hdsim.model.drive import radial_support
+from hdsim.model.fe_check import fe_rim_stiffness
 from hdsim.physics import fe_rim
-from hdsim.physics.compliance import rim_between_balls_stiffness
 
 E, NU = 210e9, 0.3
 BALLS = 22
@@ -118,12 +119,9 @@ def test_closed_form_rim_agrees_with_the_fe_for_the_unit_support(wall_factor):
     """The chain's rim term against this model at the built-in support width, both ball
     placements averaged (the WG turns, so the balls pass every position), walls ±10 %."""
     model = load_unit("CSG-25-100")
-    g, wg = model.geometry, model.wave_generator
-    h = wall_factor * float(g.h_pz)
-    a = float(wg.engagement_fraction) * 2 * np.pi * (float(g.R_i) + h / 2)
-    args = _rim_args(wall=h, arc_length=a, balls=int(wg.balls), contact_width=float(wg.support_width))
-    fe = np.mean([fe_rim.rim_radial_stiffness_fe(**args, ball_on_centre=c).stiffness for c in (True, False)])
-    closed = rim_between_balls_stiffness(h, g.face_width, g.E, g.nu, wg.ball_pitch(g.R_i), wg.support_width, a)
+    shape = model.with_updates({"flexspline.h_pz": wall_factor * model.params()["flexspline.h_pz"]})
+    fe = fe_rim_stiffness(shape, refinement=1)
+    closed = float(radial_support(shape.geometry, shape.wave_generator).rim)
     assert fe / closed == pytest.approx(1.0, abs=0.05)
 
 

@@ -49,16 +49,10 @@ def elasticities(unit="CSG-25-100"):
 
 def fe_cup_check(unit="CSG-25-100"):
     """FE cup over closed-form cup at the nominal shape and the 32 corners of the box."""
-    import itertools
-
-    from hdsim.model.fe_check import compliance_report
+    from hdsim.model.fe_check import corner_shapes, fe_cup_check
 
     model = load_unit(unit)
-    nominal = {name: model.params()[f"flexspline.{name}"] for name in NAMES}
-    ratios = [compliance_report(model, fe=True)["fe"]["ratio"]]
-    for corner in itertools.product((0.9, 1.1), repeat=len(NAMES)):
-        shape = model.with_updates({f"flexspline.{k}": f * v for (k, v), f in zip(nominal.items(), corner)})
-        ratios.append(compliance_report(shape, fe=True)["fe"]["ratio"])
+    ratios = [fe_cup_check(shape)["ratio"] for shape in [model, *corner_shapes(model, NAMES)]]
     return {"shapes": len(ratios), "nominal": ratios[0], "min": min(ratios), "max": max(ratios)}
 
 

@@ -15,12 +15,13 @@ from hdsim.plotting import save_figure
 from hdsim.scenarios.scenario import Scenario
 
 
-def add_set_argument(parser) -> None:
-    """Add the repeatable ``--set NAME=VALUE`` option to a verb's parser."""
+def add_set_argument(parser, help: str | None = None) -> None:
+    """Add the repeatable ``--set NAME=VALUE`` option to a verb's parser (``help`` for a
+    verb that runs no scenario)."""
     parser.add_argument(
         "--set", dest="sets", action="append", default=[], metavar="NAME=VALUE",
-        help="change a parameter (SI units), e.g. flexspline.h_c=0.6e-3; switch an effect off "
-             "with FAMILY=none, e.g. backlash=none; change the scenario with scenario.load.rate=0.1")
+        help=help or "change a parameter (SI units), e.g. flexspline.h_c=0.6e-3; switch an effect off "
+                     "with FAMILY=none, e.g. backlash=none; change the scenario with scenario.load.rate=0.1")
 
 
 def parse_sets(items) -> dict[str, str]:

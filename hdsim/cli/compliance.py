@@ -22,8 +22,7 @@ def register(subparsers) -> None:
                    help="built-in unit (default CSG-25-100; see 'hdsim units') or a drive file")
     p.add_argument("--fe", action="store_true",
                    help="also check the cup and the rim by finite elements (a few seconds)")
-    p.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE",
-                   help="change a parameter (SI units), e.g. flexspline.h_c=0.7e-3")
+    _common.add_set_argument(p, help="change a parameter (SI units), e.g. flexspline.h_c=0.7e-3")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.set_defaults(func=main)
 

@@ -10,6 +10,8 @@ the ``fe`` extra): the cup in torsion on the flexspline's meridional section
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 
 from hdsim.errors import InputError
@@ -43,6 +45,29 @@ def cup_section(g: FlexsplineGeometry) -> dict[str, float]:
     if any(np.ndim(v) for v in values.values()):
         raise InputError("the finite-element cup takes one geometry, not a batch")
     return {k: float(v) for k, v in values.items()}
+
+
+def corner_shapes(model: HarmonicDrive, names, spread: float = 0.10) -> list[HarmonicDrive]:
+    """The model at every corner of the box ``(1 ± spread)·nominal`` of the named flexspline
+    dimensions (``2**len(names)`` shapes), where a check of the closed forms is hardest.
+
+    Parameters
+    ----------
+    model : HarmonicDrive
+        One unit.
+    names : iterable of str
+        Flexspline dimensions, e.g. ``("h_pz", "h_c", "R_v", "R_k", "h_p")``.
+    spread : float
+        Half-width of the box as a share of the nominal value [-].
+
+    Returns
+    -------
+    list of HarmonicDrive
+        One model per corner.
+    """
+    nominal = {name: model.params()[f"flexspline.{name}"] for name in names}
+    return [model.with_updates({f"flexspline.{k}": f * v for (k, v), f in zip(nominal.items(), corner)})
+            for corner in itertools.product((1.0 - spread, 1.0 + spread), repeat=len(nominal))]
 
 
 def fe_cup_compliance(g: FlexsplineGeometry, *, tolerance: float = 0.005):
@@ -109,6 +134,32 @@ def fe_rim_stiffness(model: HarmonicDrive, *, refinement: float = 2.0) -> float:
                           for centre in (True, False)]))
 
 
+def closed_form_cup(model: HarmonicDrive) -> float:
+    """The cup of the closed-form chain: the segments from the diaphragm to the undercut
+    [rad/(N·m)]."""
+    chain = model.compliance()
+    return float(sum(np.asarray(getattr(chain, name)) for name in CUP_SEGMENTS))
+
+
+def fe_cup_check(model: HarmonicDrive) -> dict:
+    """The finite-element cup against the closed-form one.
+
+    Parameters
+    ----------
+    model : HarmonicDrive
+        One unit.
+
+    Returns
+    -------
+    dict
+        ``cup`` [rad/(N·m)], ``elements``, ``seconds``, ``change`` (the last refinement's
+        relative change) and ``ratio`` (FE cup over `closed_form_cup`).
+    """
+    result = fe_cup_compliance(model.geometry)
+    return {"cup": result.compliance, "elements": result.elements, "seconds": round(result.seconds, 3),
+            "change": result.change, "ratio": result.compliance / closed_form_cup(model)}
+
+
 def compliance_report(model: HarmonicDrive, *, fe: bool = False) -> dict:
     """The torsional compliance of the flexspline by segment [rad/(N·m)].
 
@@ -117,17 +168,15 @@ def compliance_report(model: HarmonicDrive, *, fe: bool = False) -> dict:
     model : HarmonicDrive
         One unit (its calibration is applied to the mesh zone).
     fe : bool
-        Also compute the cup by finite elements (needs scikit-fem).
+        Also the two finite-element checks (needs scikit-fem).
 
     Returns
     -------
     dict
         ``unit``; ``closed_form``: the segments, ``cup``, ``rim``, ``mesh_zone`` (calibrated)
-        and ``total``; ``calibration``: ``kappa_mesh``; with ``fe``, ``fe``: ``cup``,
-        ``elements``, ``seconds``, ``change`` (the last refinement's relative change),
-        ``ratio`` (FE cup over closed-form cup) and ``rim_radial``: the rim's radial
-        stiffness per zone [N/m] by FE (``fe``) and closed form (``closed_form``) and
-        their ``ratio``.
+        and ``total``; ``calibration``: ``kappa_mesh``; with ``fe``, ``fe``: `fe_cup_check`
+        and ``rim_radial``: the rim's radial stiffness per zone [N/m] by FE (``fe``) and
+        closed form (``closed_form``) and their ``ratio``.
     """
     chain = {k: float(np.asarray(v)) for k, v in model.compliance().as_dict().items()}
     closed = {name: chain[name] for name in CUP_SEGMENTS}
@@ -136,11 +185,8 @@ def compliance_report(model: HarmonicDrive, *, fe: bool = False) -> dict:
     report = {"unit": model.name, "closed_form": closed,
               "calibration": {"kappa_mesh": float(np.asarray(model.calibration.kappa_mesh))}}
     if fe:
-        result = fe_cup_compliance(model.geometry)
         rim_closed = float(np.asarray(radial_support(model.geometry, model.wave_generator).rim))
         rim_fe = fe_rim_stiffness(model)
-        report["fe"] = {"cup": result.compliance, "elements": result.elements,
-                        "seconds": round(result.seconds, 3), "change": result.change,
-                        "ratio": result.compliance / closed["cup"],
+        report["fe"] = {**fe_cup_check(model),
                         "rim_radial": {"fe": rim_fe, "closed_form": rim_closed, "ratio": rim_fe / rim_closed}}
     return report
