@@ -192,8 +192,9 @@ def rim_between_balls_stiffness(wall, face_width, E, nu, ball_pitch, support_wid
 
     The effective span ``L`` is the clear span between the support patches plus 0.4 h
     at each end, where a plane-stress finite-element model of the ring puts the
-    effective clamp; with it the formula is within 3.5 % of that model for support
-    patches up to a fifth of the pitch and walls of ±10 % (docs/physics.md §3.7).
+    effective clamp; with it the formula is within 4.5 % of that model for support
+    patches from 5 % to 20 % of the pitch, and within 2.4 % for walls of ±10 % at the
+    built-in support (docs/physics.md §3.7).
 
     Parameters
     ----------
