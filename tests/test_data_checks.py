@@ -12,7 +12,7 @@ import pytest
 
 import truth
 from hdsim.identification.outcome import assess
-from hdsim.io.data_checks import DriveScale, examine, noise_level
+from hdsim.io.data_checks import DriveScale, examine, local_cubic_weights, noise_level
 from hdsim.io.measurement import make_measurement, save_measurement
 from hdsim.model.catalog import load_unit
 
@@ -32,6 +32,25 @@ def test_noise_is_estimated_without_a_model(sigma):
     assert noise_level(clean + rng.normal(0.0, sigma, t.size)) == pytest.approx(sigma, rel=0.1)
     coarse = 50.0 * np.sin(np.linspace(0, 2 * np.pi, 60))  # 60 samples a cycle: curvature, not noise
     assert noise_level(coarse) < 1e-4 * np.ptp(coarse)
+
+
+def test_local_cubic_weights_are_savitzky_golay_coefficients():
+    from scipy.signal import savgol_coeffs
+
+    for window in (5, 7, 11):
+        np.testing.assert_allclose(local_cubic_weights(window), savgol_coeffs(window, 3), atol=1e-14)
+
+
+def test_rank_correlation_is_spearmans_with_ties():
+    from scipy.stats import spearmanr
+
+    from hdsim.io.data_checks import _rank_correlation
+
+    rng = np.random.default_rng(3)
+    a = rng.normal(size=500)
+    b = np.round(a + rng.normal(0, 0.8, a.size), 1)  # quantised: many ties, as an encoder gives
+    assert _rank_correlation(a, b) == pytest.approx(spearmanr(a, b).statistic, abs=1e-12)
+    assert _rank_correlation(a, np.round(-a, 0)) == pytest.approx(spearmanr(a, np.round(-a, 0)).statistic, abs=1e-12)
 
 
 def test_a_truth_stiffness_record_passes_and_its_cycle_is_counted():

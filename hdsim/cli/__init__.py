@@ -19,7 +19,9 @@ from hdsim.errors import InputError, SolverError
 VERBS = ("demo", "units", "simulate", "compliance", "sobol", "fit", "diagnose")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The parser of every verb, or of verb ``only`` alone: a verb's module imports what
+    the verb needs (the dynamic solvers, the FE), and a command should not pay for the others'."""
     parser = argparse.ArgumentParser(
         prog="hdsim",
         description="Harmonic drive simulator: stiffness, lost motion, kinematic error, "
@@ -32,7 +34,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help="show the Python traceback of an error (anywhere on the command line; "
                              "or set HDSIM_DEBUG=1)")
     subparsers = parser.add_subparsers(dest="verb", metavar="VERB")
-    for verb in VERBS:
+    for verb in VERBS if only is None else (only,):
         try:
             module = importlib.import_module(f"hdsim.cli.{verb}")
         except ModuleNotFoundError as exc:  # a verb whose module has not landed yet
@@ -61,10 +63,11 @@ def _json_default(value):
 
 
 def main(argv=None) -> int:
-    parser = build_parser()
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv  # accepted before or after the verb
     argv = [a for a in argv if a != "--debug"]
+    first = next((a for a in argv if not a.startswith("-")), None)
+    parser = build_parser(first if first in VERBS else None)
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)

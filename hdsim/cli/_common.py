@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -12,7 +13,9 @@ from hdsim.errors import InputError, unknown_name
 from hdsim.model.drive import HarmonicDrive
 from hdsim.model.effects import FAMILIES, NO_EFFECT
 from hdsim.plotting import save_figure
-from hdsim.scenarios.scenario import Scenario
+
+if TYPE_CHECKING:  # the scenarios pull in the dynamic solvers, which `fit` and `diagnose` never use
+    from hdsim.scenarios.scenario import Scenario
 
 
 def add_set_argument(parser, help: str | None = None) -> None:

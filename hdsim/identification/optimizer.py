@@ -42,6 +42,19 @@ def residuals(ev: Evaluator, prob: FitProblem, twist: np.ndarray):
     return full[:, prob.rows], full, coef
 
 
+def row_residuals(ev: Evaluator, prob: FitProblem, twist: np.ndarray) -> np.ndarray:
+    """The residual on the problem's rows alone (M, n_rows), as `residuals` gives it: the
+    optimiser's every pass needs only these, and a fold's rows are a part of the record."""
+    rows = prob.row_index
+    if rows is None:
+        target = ev.y_rel[None, :] - twist
+        basis = prob.basis
+    else:
+        target = ev.y_rel[rows][None, :] - np.take(twist, rows, axis=1)
+        basis = prob.basis[rows]
+    return target - (target @ prob.basis_pinv.T) @ basis.T
+
+
 def fit_many(ev: Evaluator, problems: list[FitProblem], *, tol: float = 1e-3, log=None) -> int:
     """Run the Levenberg–Marquardt fits of ``problems`` in lockstep (in place).
 
@@ -74,7 +87,7 @@ def fit_many(ev: Evaluator, problems: list[FitProblem], *, tol: float = 1e-3, lo
             size = U.shape[0] if p.names else 1
             block = twist[row:row + size]
             row += size
-            r_rows, _, _ = residuals(ev, p, block)
+            r_rows = row_residuals(ev, p, block)
             _update(p, r_rows, kind == "start", steps, trials, tol, block)
         pending = [p for p in pending if not p.done]
         if log:

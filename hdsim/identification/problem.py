@@ -24,6 +24,8 @@ always fitted and never counted as error.
 
 from __future__ import annotations
 
+import functools
+
 import math
 from dataclasses import dataclass, field, replace
 
@@ -72,6 +74,11 @@ def loading_slope(meas: Measurement, lo: float = 0.1, hi: float = 0.5) -> float:
 
 def zero_torque_signatures(meas: Measurement) -> dict:
     """Loop width and step at zero torque [rad], median |dT/dt| [N·m/s]."""
+    return dict(_zero_torque_signatures(meas))
+
+
+@functools.lru_cache(maxsize=16)  # a diagnosis asks once per candidate and fold: same records
+def _zero_torque_signatures(meas: Measurement) -> dict:
     T = np.asarray(meas.torque, dtype=float)
     y = relative_angle(meas)
     Tmax = max(np.max(np.abs(T)), 1e-12)
@@ -146,8 +153,10 @@ def split_stiffness(model: HarmonicDrive, K0, ratio=1.0, e_cap: float = E_INF_CA
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         E_b = np.clip(np.nan_to_num(E0 * cs0 / cs_target, nan=E0, posinf=E_MAX_FACTOR * E0), E0,
                       E_MAX_FACTOR * E0)
-    chain_b = compliance_chain(replace(g, E=np.where(ok, E0, E_b)), wg, 1.0)
-    cm_b = np.asarray(chain_b.mesh_zone, dtype=float)
+    if np.all(ok):  # the nominal structure serves every row (the common case): no second chain
+        cm_b = cm0
+    else:
+        cm_b = np.asarray(compliance_chain(replace(g, E=np.where(ok, E0, E_b)), wg, 1.0).mesh_zone, dtype=float)
     kappa_b = share * C0 / cm_b
     # an extreme trial (K∞ barely above K0 on the stiffened branch) may ask for a κ outside its
     # physical range; the trial is then held at the bound instead of failing the whole batch
@@ -323,6 +332,17 @@ class FitProblem:
         if not self.names:
             return self.model
         return self.model.with_updates(self.updates(U))
+
+    @functools.cached_property
+    def row_index(self) -> np.ndarray | None:
+        """Indices of the fitted rows, None when they are all (no copy needed)."""
+        return None if bool(np.all(self.rows)) else np.flatnonzero(self.rows)
+
+    @functools.cached_property
+    def basis_pinv(self) -> np.ndarray:
+        """Pseudo-inverse of the basis on the fitted rows, (k, n_rows): the linear part's
+        least-squares solution, the same at every pass."""
+        return np.linalg.pinv(self.basis[self.rows])
 
     def fd_steps(self) -> np.ndarray:
         return 1e-5 * np.maximum(1.0, np.abs(self.u)) if self.u.size else self.u

@@ -55,6 +55,7 @@ Every registered effect works here, including a law defined outside the package;
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -65,6 +66,10 @@ from hdsim.model.drive import SLOTS, HarmonicDrive
 
 __all__ = ["UnsupportedEffect", "Plan", "stack_models", "stackable_groups", "locked_twist",
            "dynamic_locked_twist", "sample_grid"]
+
+
+#: how the step loop runs (`locked_twist`'s ``engine``)
+ENGINES = ("auto", "compiled", "numpy")
 
 
 class UnsupportedEffect(InputError):
@@ -210,7 +215,7 @@ class _Kernel:
 
 
 def locked_twist(models, time, torque, *, grid=None, tol=1e-9, x_tol=1e-8, max_iter=60,
-                 return_states=False, on_failure: str = "raise"):
+                 return_states=False, on_failure: str = "raise", engine: str | None = None):
     """Quasi-static output twist [rad] of the locked-WG bench under a measured torque.
 
     Parameters
@@ -243,6 +248,13 @@ def locked_twist(models, time, torque, *, grid=None, tol=1e-9, x_tol=1e-8, max_i
         What to do with a parameter set whose torque balance Newton could not solve
         within ``max_iter`` at some sample: raise `SolverError` naming the sample, or
         give that row NaN (the fit treats it as a trial that failed).
+    engine : {"auto", "compiled", "numpy"}, optional
+        How the steps run: "compiled" by numba (`hdsim.simulation.quasistatic_compiled`,
+        parameter sets one by one, spread over the cores), "numpy" (all parameter sets in
+        lockstep, pure numpy), "auto" the compiled loop where numba is installed and
+        every law of the batch has a compiled form, else numpy. Default: the
+        environment variable ``HDSIM_ENGINE``, else "auto". The two agree to the Newton
+        tolerance.
 
     Raises
     ------
@@ -269,11 +281,14 @@ def locked_twist(models, time, torque, *, grid=None, tol=1e-9, x_tol=1e-8, max_i
                          f"after {t[i]:g} s")
     if on_failure not in ("raise", "nan"):
         raise InputError(f"on_failure must be 'raise' or 'nan', got {on_failure!r}")
+    engine = engine or os.environ.get("HDSIM_ENGINE") or "auto"
+    if engine not in ENGINES:
+        raise InputError(f"engine must be one of {ENGINES}, got {engine!r}")
     plan = models if isinstance(models, Plan) else stack_models(models)
     # cosh overflow far out on the tanh law (tangent → K∞); e^μ overflow and ∞/∞ in the
     # fitted rate of an undamped row (β = γ = 0, `_phi_functions`); an empty bracket's midpoint
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        out, failed = _locked_twist(plan, t, T, grid, tol, x_tol, max_iter, return_states)
+        out, failed = _locked_twist(plan, t, T, grid, tol, x_tol, max_iter, return_states, engine)
     if np.any(failed >= 0):
         x = out[0] if return_states else out
         if on_failure == "raise":
@@ -285,7 +300,7 @@ def locked_twist(models, time, torque, *, grid=None, tol=1e-9, x_tol=1e-8, max_i
     return out
 
 
-def _locked_twist(plan, t, T, grid, tol, x_tol, max_iter, return_states):
+def _locked_twist(plan, t, T, grid, tol, x_tol, max_iter, return_states, engine):
     if isinstance(grid, str) or (isinstance(grid, (int, np.integer)) and not isinstance(grid, bool)):
         budget = 4000 if isinstance(grid, str) else int(grid)
         t_max = max(float(np.max(np.abs(T))), 1e-12)
@@ -293,13 +308,52 @@ def _locked_twist(plan, t, T, grid, tol, x_tol, max_iter, return_states):
                            zero_band=min(0.04 + 1.25 * plan.memory_torque / t_max, 0.5))
     idx = np.arange(t.size) if grid is None else np.asarray(grid, dtype=int)
     tg, Tg = t[idx], T[idx]
-    kern = _Kernel(plan)
-    M = plan.size
     tol_T = tol * max(float(np.max(np.abs(T))), 1e-12)
-    e_out = np.empty((M, idx.size))
-    s_out = np.empty((kern.n_states, M, idx.size)) if return_states else None
+    compiled = None if engine == "numpy" else _compiled_laws(plan, engine)
+    if compiled is not None:
+        module, laws = compiled
+        e_grid, s_out, failed = module.step_loop(laws, tg, Tg, tol_T, x_tol, max_iter, return_states)
+        # the body twist is smooth between steps; the dead-zone angle is exact at every sample
+        x_out = module.output_twist(laws, t, tg, e_grid, T)
+    else:
+        e_grid, s_out, failed = _numpy_steps(plan, tg, Tg, tol_T, x_tol, max_iter, return_states)
+        e_out = _interp_rows(t, tg, e_grid) if idx.size != t.size else e_grid
+        x_out = _Kernel(plan).output_twist(e_out, T)
+    n_states = len(plan.friction.state_names)
+    if return_states and idx.size != t.size:
+        s_out = np.array([_interp_rows(t, tg, rows) for rows in s_out]).reshape(n_states, plan.size, t.size)
+    failed = np.where(failed >= 0, idx[np.maximum(failed, 0)], -1)  # first unsolved sample
+    if not return_states:
+        return x_out, failed
+    return (x_out, (s_out[0] if n_states == 1 else s_out)), failed
+
+
+def _compiled_laws(plan, engine):
+    """(`hdsim.simulation.quasistatic_compiled`, the plan's compiled laws), or None for
+    the numpy loop: numba missing, or a law without a compiled form, and engine "auto"."""
+    try:
+        from hdsim.simulation import quasistatic_compiled
+    except ImportError:
+        if engine == "compiled":
+            raise InputError("the compiled quasi-static engine needs numba: pip install 'hdsim[fast]'") from None
+        return None
+    laws = quasistatic_compiled.compiled_laws(plan)
+    if laws is None:
+        if engine == "compiled":
+            raise UnsupportedEffect("a law of this model has no compiled form; use engine 'numpy' or 'auto'")
+        return None
+    return quasistatic_compiled, laws
+
+
+def _numpy_steps(plan, tg, Tg, tol_T, x_tol, max_iter, return_states):
+    """Body twist (M, G) and friction states (n_states, M, G) on the grid, all parameter
+    sets in lockstep, and the first grid index each set failed at (−1: none)."""
+    kern = _Kernel(plan)
+    M, G = plan.size, tg.size
+    e_out = np.empty((M, G))
+    s_out = np.empty((kern.n_states, M, G)) if return_states else None
     k0 = kern.k0
-    solved = np.empty((M, idx.size), dtype=bool)  # balance solved, per row and grid sample
+    solved = np.empty((M, G), dtype=bool)  # balance solved, per row and grid sample
     e, s, u, k, solved[:, 0] = _solve(kern, Tg[0] / k0, np.zeros(M), kern.zero_states(), Tg[0], None, tol_T,
                                       x_tol, max_iter, np.abs(Tg[0]) / k0)
     e_out[:, 0] = e
@@ -307,7 +361,7 @@ def _locked_twist(plan, t, T, grid, tol, x_tol, max_iter, return_states):
         s_out[:, :, 0] = s
     e_prev, h_prev = e, None
     steps, torque_steps = np.diff(tg).tolist(), np.diff(Tg).tolist()  # Python floats: cheaper per step
-    for j in range(1, idx.size):
+    for j in range(1, G):
         h, dT = steps[j - 1], torque_steps[j - 1]
         guess = e + dT / k0 if h_prev is None else e + (e - e_prev) * (h / h_prev)
         rate = kern.rate_coefficients(k, u, s, dT, h)
@@ -317,16 +371,7 @@ def _locked_twist(plan, t, T, grid, tol, x_tol, max_iter, return_states):
         e_out[:, j] = e
         if return_states:
             s_out[:, :, j] = s
-    if idx.size != t.size:
-        # the body twist is smooth between steps; the dead-zone angle is exact at every sample
-        e_out = _interp_rows(t, tg, e_out)
-        if return_states:
-            s_out = np.array([_interp_rows(t, tg, rows) for rows in s_out]).reshape(kern.n_states, M, t.size)
-    x_out = kern.output_twist(e_out, T)
-    failed = np.where(solved.all(axis=1), -1, idx[np.argmin(solved, axis=1)])  # first unsolved sample
-    if not return_states:
-        return x_out, failed
-    return (x_out, (s_out[0] if kern.n_states == 1 else s_out)), failed
+    return e_out, s_out, np.where(solved.all(axis=1), -1, np.argmin(solved, axis=1))
 
 
 def _solve(kern, guess, e0, s0, torque, rate, tol_T, x_tol, max_iter, x_scale):

@@ -19,7 +19,7 @@ from typing import ClassVar, Protocol
 
 import numpy as np
 
-from hdsim.model.effects.base import Effect, FitContext, FreeParameter
+from hdsim.model.effects.base import Effect, FitContext, FreeParameter, parameter_rows
 from hdsim.model.parameters import param
 from hdsim.physics import backlash as bl
 
@@ -81,6 +81,12 @@ class NoBacklash(Backlash):
 
     id: ClassVar[str] = "none"
     is_null: ClassVar[bool] = True
+
+    def compiled(self, size, c_struct, c_mesh):
+        if not self.keeps_law_of(NoBacklash, ("twist_at_torque",)):
+            return None
+        from hdsim.model.effects import kernels
+        return (kernels.no_gap_twist,), parameter_rows(size)
 
 
 @dataclass(frozen=True, eq=False)
@@ -192,6 +198,13 @@ class DeadZoneBacklash(Backlash):
             out[open_] = _twist_in_gap(v[open_], gap[open_, None], rounding[open_, None])
             return out
         return _twist_in_gap(v, gap, rounding)
+
+    def compiled(self, size, c_struct, c_mesh):
+        if not self.keeps_law_of(DeadZoneBacklash, ("twist_at_torque", "_width")):
+            return None
+        from hdsim.model.effects import kernels
+        half, width = 0.5 * np.asarray(self.gap, dtype=float), self._width()
+        return (kernels.dead_zone_gap_twist,), parameter_rows(size, half, width, np.exp(-half / width))
 
     def free_parameters(self, context: FitContext):
         return (FreeParameter("gap", 0.0, 0.05, float(np.clip(context.step, 2e-5, 1e-2))),)

@@ -130,6 +130,22 @@ class Effect(Parameters):
         """High-load over low-load stiffness this effect asks of the base split (1: none)."""
         return 1.0
 
+    # ------------------------------------------------------------------ compiled form
+    def compiled(self, size: int, c_struct, c_mesh):
+        """This law's compiled scalar form for the compiled quasi-static evaluator, or None.
+
+        ``(functions, rows)``: the law's kernels (`hdsim.model.effects.kernels`, one
+        signature per family) and its parameters as a C-ordered float array of ``size``
+        rows, one per parameter set. None (the default) sends the evaluator to the
+        numpy law, which every effect has. Needs numba; the caller checks it is there.
+        """
+        return None
+
+    def keeps_law_of(self, owner: type, methods: tuple[str, ...]) -> bool:
+        """True when this instance's class takes ``methods`` from ``owner`` unchanged: a
+        subclass that redefines its law must not inherit a compiled twin of the old one."""
+        return all(getattr(type(self), name) is getattr(owner, name) for name in methods)
+
     @classmethod
     def neutral(cls) -> "Effect":
         """An instance that acts exactly as "no effect" (used to stack models that
@@ -161,3 +177,12 @@ class Effect(Parameters):
         values = ", ".join(f"{f.name}={np.asarray(getattr(self, f.name)).reshape(-1)[0]:.4g}"
                            for f in fields(self) if f.metadata)
         return f"{self.family}={self.id}" + (f"({values})" if values else "")
+
+
+def parameter_rows(size: int, *columns) -> np.ndarray:
+    """Columns (scalars or arrays of ``size``) as a C-ordered (size, n) float array, the
+    layout of a compiled law's parameters (`Effect.compiled`)."""
+    if not columns:
+        columns = (0.0,)
+    return np.ascontiguousarray(np.column_stack([np.broadcast_to(np.asarray(c, dtype=float), (size,))
+                                                 for c in columns]))

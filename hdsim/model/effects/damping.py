@@ -7,7 +7,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from hdsim.model.effects.base import Effect, FitContext, FreeParameter
+from hdsim.model.effects.base import Effect, FitContext, FreeParameter, parameter_rows
 from hdsim.model.parameters import param
 from hdsim.physics import damping as dp
 
@@ -35,6 +35,12 @@ class NoDamping(Damping):
     id: ClassVar[str] = "none"
     is_null: ClassVar[bool] = True
 
+    def compiled(self, size, c_struct, c_mesh):
+        if not self.keeps_law_of(NoDamping, ("coefficient_at",)):
+            return None
+        from hdsim.model.effects import kernels
+        return (kernels.no_damping,), parameter_rows(size)
+
 
 @dataclass(frozen=True, eq=False)
 class ViscousDamping(Damping):
@@ -54,6 +60,13 @@ class ViscousDamping(Damping):
 
     def coefficient_at(self, tangent_ratio):
         return dp.load_dependent_coefficient(self.coefficient, self.stiffness_share, tangent_ratio)
+
+    def compiled(self, size, c_struct, c_mesh):
+        # the kernel takes the tangent ratio always; with share 0 it does not matter
+        if not self.keeps_law_of(ViscousDamping, ("coefficient_at",)):
+            return None
+        from hdsim.model.effects import kernels
+        return (kernels.viscous_damping,), parameter_rows(size, self.coefficient, self.stiffness_share)
 
     @property
     def follows_stiffness(self) -> bool:

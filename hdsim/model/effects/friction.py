@@ -26,9 +26,13 @@ from typing import ClassVar
 
 import numpy as np
 
-from hdsim.model.effects.base import Effect, FitContext, FreeParameter
+from hdsim.model.effects.base import Effect, FitContext, FreeParameter, parameter_rows
 from hdsim.model.parameters import param
 from hdsim.physics import friction as fr
+
+
+#: the methods a compiled twin stands for (`Effect.keeps_law_of`)
+_LAW = ("parallel_torque", "series_slip", "rates", "advance", "path_tangent", "quasistatic")
 
 
 def _states(states) -> np.ndarray:
@@ -141,6 +145,12 @@ class NoFriction(Friction):
     id: ClassVar[str] = "none"
     is_null: ClassVar[bool] = True
 
+    def compiled(self, size, c_struct, c_mesh):
+        if not self.keeps_law_of(NoFriction, _LAW):
+            return None
+        from hdsim.model.effects import kernels
+        return (kernels.no_advance, kernels.no_friction_torque), parameter_rows(size)
+
 
 class _DahlLaw(Friction):
     """Shared Dahl torque law ``dz/de = σ (1 − z/F sgn ė)`` (Dahl, 1968), state z [N·m]."""
@@ -181,6 +191,13 @@ class _DahlLaw(Friction):
     def path_tangent(self, states, direction, spring_torque, spring_tangent):
         sigma, F = self._law()
         return spring_tangent + fr.dahl_slope(states[0], direction, sigma, F)
+
+    def compiled(self, size, c_struct, c_mesh):
+        if not self.keeps_law_of(_DahlLaw, _LAW + ("_decay",)):
+            return None
+        from hdsim.model.effects import kernels
+        decay, F = self._decay
+        return (kernels.dahl_advance, kernels.dahl_torque), parameter_rows(size, decay, F, self._law()[0])
 
     def quasistatic(self, states, start, end, spring):
         # the generic step without its layers (Dahl has no series slip, its torque is its
@@ -330,6 +347,13 @@ class MaxwellSlip(Friction):
         with np.errstate(divide="ignore", invalid="ignore"):
             pushed = np.where(direction * states * k >= f * (1.0 - 1e-9), 0.0, 1.0)
         return spring_tangent + np.sum(k * pushed, axis=0)
+
+    def compiled(self, size, c_struct, c_mesh):
+        if not self.keeps_law_of(MaxwellSlip, _LAW + ("_columns", "n_elements")):
+            return None
+        from hdsim.model.effects import kernels
+        columns = [row for column in self._columns for row in np.broadcast_to(column, (self.n_elements, size))]
+        return (kernels.maxwell_slip_advance, kernels.maxwell_slip_torque), parameter_rows(size, *columns)
 
     def free_parameters(self, context: FitContext):
         t = context.max_torque

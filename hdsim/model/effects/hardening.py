@@ -12,9 +12,13 @@ from typing import ClassVar
 
 import numpy as np
 
-from hdsim.model.effects.base import Effect, FitContext, FreeParameter
+from hdsim.model.effects.base import Effect, FitContext, FreeParameter, parameter_rows
 from hdsim.model.parameters import param
 from hdsim.physics import stiffness as st
+
+
+#: the methods a compiled twin stands for (`Effect.keeps_law_of`)
+_LAW = ("torque", "tangent", "spring_law")
 
 
 class Hardening(Effect):
@@ -52,6 +56,11 @@ class NoHardening(Hardening):
         k = 1.0 / (c_struct + c_mesh)
         return lambda twist: (k * twist, k)
 
+    def compiled(self, size, c_struct, c_mesh):
+        if not self.keeps_law_of(NoHardening, _LAW):
+            return None
+        from hdsim.model.effects import kernels
+        return (kernels.linear_spring,), parameter_rows(size, 1.0 / (c_struct + c_mesh))
 
 
 @dataclass(frozen=True, eq=False)
@@ -92,6 +101,12 @@ class ThreeSegmentHardening(Hardening):
         args = self._args(c_struct, c_mesh)
         return lambda twist: (st.smooth_three_segment_torque(twist, *args),
                               st.smooth_three_segment_tangent(twist, *args))
+
+    def compiled(self, size, c_struct, c_mesh):
+        if not self.keeps_law_of(ThreeSegmentHardening, _LAW + ("_args",)):
+            return None
+        from hdsim.model.effects import kernels
+        return (kernels.smooth_three_segment_spring,), parameter_rows(size, *self._args(c_struct, c_mesh))
 
     def free_parameters(self, context: FitContext):
         t = context.max_torque
@@ -141,6 +156,12 @@ class TanhHardening(Hardening):
         # far out on the law cosh overflows and the tangent tends to K∞ as it should; the
         # callers (solver, quasi-static evaluator) run under np.errstate(over="ignore")
         return lambda twist: (st.tanh_hardening_torque(twist, *args), st.tanh_hardening_tangent(twist, *args))
+
+    def compiled(self, size, c_struct, c_mesh):
+        if not self.keeps_law_of(TanhHardening, _LAW + ("_k",)):
+            return None
+        from hdsim.model.effects import kernels
+        return (kernels.tanh_spring,), parameter_rows(size, *self._k(c_struct, c_mesh))
 
     def free_parameters(self, context: FitContext):
         return (FreeParameter("curvature", 0.0, np.inf, 3.0 / (0.6 * context.max_torque) ** 2),

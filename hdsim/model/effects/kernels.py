@@ -1,0 +1,165 @@
+"""Compiled scalar forms of the built-in laws, for the compiled quasi-static evaluator.
+
+Optional: this module needs numba (``pip install "hdsim[fast]"``); the effects import it
+only when asked for their compiled form (`Effect.compiled`), and the evaluator falls back
+to its numpy form when numba is missing or a law has none (a law defined outside the
+package, a law in series with the spring). Each function is the scalar twin of the numpy
+law it names, for one parameter set (one row of a batch); the evaluator's tests check
+each pair against each other.
+
+Every kernel has one of five fixed signatures and is compiled with it, so the evaluator
+takes them as first-class functions (`numba.types.FunctionType`) and is compiled once for
+all combinations of laws and cached on disk (``cache=True``): a new process loads it in
+well under a second instead of compiling it for each combination.
+
+Parameters travel as one float row per parameter set (``p``), laid out by the effect's
+`compiled` method next to its numpy law.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit, types
+
+_F8 = types.float64
+_ROW = types.float64[::1]
+
+#: spring law of the hardening family: (torque [N·m], tangent [N·m/rad]) at body twist e
+SPRING = types.UniTuple(_F8, 2)(_F8, _ROW)
+#: friction states after the body twist moves monotonically from e0 to e, written to ``out``
+ADVANCE = types.void(_ROW, _F8, _F8, _ROW, _ROW)
+#: (parallel friction torque [N·m], its slope along the path [N·m/rad]) of states s moving in direction d
+FRICTION_TORQUE = types.UniTuple(_F8, 2)(_ROW, _F8, _ROW)
+#: viscous coefficient [N·m·s/rad] where the tangent stiffness is ratio·K₀
+DAMPING = _F8(_F8, _ROW)
+#: angle of the dead zone [rad] that carries the contact twist v = T/K₀
+GAP_TWIST = _F8(_F8, _ROW)
+
+FUNCTION_TYPES = {"spring": types.FunctionType(SPRING), "advance": types.FunctionType(ADVANCE),
+                  "friction_torque": types.FunctionType(FRICTION_TORQUE),
+                  "damping": types.FunctionType(DAMPING), "gap_twist": types.FunctionType(GAP_TWIST)}
+
+
+# --------------------------------------------------------------------------- hardening
+
+
+@njit(SPRING, cache=True)
+def linear_spring(e, p):
+    """``T = K₀ e``; p = (K₀,)."""
+    return p[0] * e, p[0]
+
+
+@njit(_F8(_F8, _F8), cache=True)
+def _softplus(x, width):
+    z = x / width
+    return width * (max(z, 0.0) + math.log1p(math.exp(-abs(z))))
+
+
+@njit(SPRING, cache=True)
+def smooth_three_segment_spring(e, p):
+    """`hdsim.physics.stiffness.smooth_three_segment_torque` and its tangent;
+    p = (T1, T2, K1, K2, K3, width)."""
+    T1, T2, K1, K2, K3, width = p[0], p[1], p[2], p[3], p[4], p[5]
+    a = abs(e)
+    phi1 = T1 / K1
+    phi2 = phi1 + (T2 - T1) / K2
+    torque = K1 * a + (K2 - K1) * _softplus(a - phi1, width) + (K3 - K2) * _softplus(a - phi2, width)
+    tangent = (K1 + (K2 - K1) * 0.5 * (1.0 + math.tanh(0.5 * (a - phi1) / width))
+               + (K3 - K2) * 0.5 * (1.0 + math.tanh(0.5 * (a - phi2) / width)))
+    return math.copysign(1.0, e) * torque if e != 0.0 else 0.0, tangent
+
+
+@njit(SPRING, cache=True)
+def tanh_spring(e, p):
+    """`hdsim.physics.stiffness.tanh_hardening_torque` and its tangent; p = (K₀, K∞, φ_s)."""
+    K0, K_inf, scale = p[0], p[1], p[2]
+    th = math.tanh(e / scale)
+    # 1/cosh² = 1 − tanh²: one transcendental instead of two (far out both are 0)
+    return K_inf * e - (K_inf - K0) * scale * th, K_inf - (K_inf - K0) * (1.0 - th * th)
+
+
+# --------------------------------------------------------------------------- friction
+
+
+@njit(ADVANCE, cache=True)
+def no_advance(s0, e0, e, p, out):
+    """No friction states."""
+
+
+@njit(FRICTION_TORQUE, cache=True)
+def no_friction_torque(s, d, p):
+    """No friction torque."""
+    return 0.0, 0.0
+
+
+@njit(ADVANCE, cache=True)
+def dahl_advance(s0, e0, e, p, out):
+    """Exact Dahl state over a monotone twist step; p = (σ/F or 0, F, σ)."""
+    step = e - e0
+    target = math.copysign(p[1], step)
+    out[0] = target - (target - s0[0]) * math.exp(-p[0] * abs(step))
+
+
+@njit(FRICTION_TORQUE, cache=True)
+def dahl_torque(s, d, p):
+    """Dahl torque (its state) and slope ``σ max(1 − z d/F, 0)``."""
+    return s[0], p[2] * max(1.0 - s[0] / p[1] * d, 0.0)
+
+
+@njit(ADVANCE, cache=True)
+def maxwell_slip_advance(s0, e0, e, p, out):
+    """Elasto-plastic elements; p = (k_1…k_n, f_1…f_n, reach_1…reach_n)."""
+    n = s0.size
+    for i in range(n):
+        reach = p[2 * n + i]
+        out[i] = min(max(s0[i] + (e - e0), -reach), reach)
+
+
+@njit(FRICTION_TORQUE, cache=True)
+def maxwell_slip_torque(s, d, p):
+    """``Σ k_i z_i`` and the stiffness of the elements not sliding in direction d."""
+    n = s.size
+    torque = 0.0
+    slope = 0.0
+    for i in range(n):
+        k, f = p[i], p[n + i]
+        torque += k * s[i]
+        if not d * s[i] * k >= f * (1.0 - 1e-9):
+            slope += k
+    return torque, slope
+
+
+# --------------------------------------------------------------------------- damping
+
+
+@njit(DAMPING, cache=True)
+def no_damping(ratio, p):
+    return 0.0
+
+
+@njit(DAMPING, cache=True)
+def viscous_damping(ratio, p):
+    """`hdsim.physics.damping.load_dependent_coefficient`; p = (c₀, share)."""
+    return p[0] * (1.0 - p[1] + p[1] * ratio)
+
+
+# --------------------------------------------------------------------------- backlash
+
+
+@njit(GAP_TWIST, cache=True)
+def no_gap_twist(v, p):
+    return 0.0
+
+
+@njit(GAP_TWIST, cache=True)
+def dead_zone_gap_twist(v, p):
+    """`hdsim.physics.backlash.inverse_smooth_dead_zone` minus v; p = (half gap h, rounding
+    width w, e^(−h/w))."""
+    h, w, c = p[0], p[1], p[2]
+    if abs(v) >= 40.0 * w:
+        return math.copysign(h, v) if v != 0.0 else 0.0
+    d = math.exp(abs(v) / w)
+    a = ((d - 1.0) + math.sqrt((d - 1.0) ** 2 + 4.0 * c * c * d)) / (2.0 * c)
+    y = w * math.log(a)
+    return (y if v > 0.0 else -y if v < 0.0 else 0.0) - v
