@@ -96,6 +96,25 @@ def test_folds_alternate_cycles_of_one_rate_and_ke_by_blocks():
 # --------------------------------------------------------------------------- discovery
 
 
+def test_a_residual_at_its_noise_floor_asks_more_of_the_next_family():
+    # after an addition the rounds go on unless the residual is white; a residual within
+    # 1.25x of its noise floor then needs twice the hold-out gain (a proxy's few per cent
+    # must not pass where only a little structure is left)
+    from types import SimpleNamespace
+
+    from hdsim.identification.selection import FLOOR_HOLDOUT_GAIN, HOLDOUT_GAIN, holdout_gain_needed
+
+    rng = np.random.default_rng(5)
+    t = np.linspace(0.0, 20.0, 4000)
+    noise = rng.normal(0.0, 1e-6, t.size)
+    slow = np.sin(2 * np.pi * 0.3 * t)
+    at_floor = noise + 0.5e-6 * slow          # rms ≈ 1.06x the noise: structured, yet explained
+    far = noise + 2e-6 * slow                 # rms ≈ 1.7x the noise
+    assert holdout_gain_needed(SimpleNamespace(residual=at_floor)) == FLOOR_HOLDOUT_GAIN
+    assert holdout_gain_needed(SimpleNamespace(residual=far)) == HOLDOUT_GAIN
+    assert FLOOR_HOLDOUT_GAIN > HOLDOUT_GAIN
+
+
 def test_hidden_hardening_is_found_and_the_error_falls():
     meas, _ = stiffness(("hardening",), ("friction",), 1, n_rows=600)
     d = diagnose(meas, "friction")

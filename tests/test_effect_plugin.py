@@ -44,9 +44,6 @@ class BoucWenFriction(fx.Friction):
         shape = 1.0 - u * u * (0.5 + 0.5 * np.sign(body_rate * z))
         return (self.stiffness * shape * body_rate,)
 
-    def memory_torque(self):
-        return np.max(self.saturation)
-
     def free_parameters(self, context):
         width = max(context.loop_width, 1e-5)
         return (fx.FreeParameter("stiffness", 0.0, np.inf, 2.0 * context.stiffness),

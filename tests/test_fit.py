@@ -187,6 +187,16 @@ def test_series_slip_law_quasistatic_matches_the_dynamic_model():
     assert np.sqrt(np.mean(error**2)) < 2e-6
 
 
+def test_a_rows_twist_on_a_sub_grid_does_not_depend_on_its_batch():
+    # the grid comes from the torque alone: a fit's trial rows (a large friction, say)
+    # must not move the twist of the row beside them, or the cost a fit minimises would
+    # change from one pass to the next
+    t, T = slow_profile(20000)
+    alone = locked_twist(full_model(), t, T, grid="auto")[0]
+    batch = full_model().with_updates({"friction.torque_max": np.array([4.0, 40.0])})
+    np.testing.assert_array_equal(locked_twist(batch, t, T, grid="auto")[0], alone)
+
+
 def test_sub_grid_of_a_long_record_stays_below_the_noise():
     model = full_model()
     t, T = slow_profile(20000)

@@ -70,18 +70,17 @@ def test_each_spring_law_equals_its_numpy_law(law):
 
 @pytest.mark.parametrize("law", FRICTION, ids=lambda e: e.id)
 def test_each_friction_law_advances_and_bends_as_its_numpy_law(law):
-    (advance, friction_torque), rows = _kernel(law)
+    (friction_step,), rows = _kernel(law)
     n = len(law.state_names)
     spring = fx.NO_EFFECT["hardening"].spring_law(C_STRUCT, C_MESH)
     states = np.zeros((n, 1))
     e0 = 0.0
     for e in np.cumsum(RNG.normal(0, 2e-4, 300)):  # a random walk: reversals of every size
         out = np.zeros(n)
-        advance(states[:, 0].copy(), e0, float(e), rows[0], out)
+        direction = 1.0 if e >= e0 else -1.0
+        torque, slope = friction_step(states[:, 0].copy(), e0, float(e), direction, rows[0], out)
         reference = law.advance(states, np.array([e0]), np.array([e]), spring)
         np.testing.assert_allclose(out, np.asarray(reference)[:, 0], rtol=1e-12, atol=1e-14)
-        direction = 1.0 if e >= e0 else -1.0
-        torque, slope = friction_torque(out, direction, rows[0])
         u, k = spring(e)
         assert torque == pytest.approx(float(np.asarray(law.parallel_torque(reference))[0] if n else 0.0),
                                        rel=1e-12, abs=1e-12)

@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hdsim.identification.folds import blocks
-from hdsim.identification.selection import RATE_PAIR, explains_as_well, rule
+from hdsim.identification.selection import RATE_PAIR, explains_as_well, holdout_gain_needed, rule
 
 __all__ = ["BlockSums", "block_labels", "block_sums", "resample_counts", "comparison_table", "RESAMPLES",
            "diagnosis_confidence"]
@@ -150,7 +150,7 @@ def diagnosis_confidence(meas, steps: list, masks: list, one_rate: bool) -> dict
             fold_min = np.minimum(*(1.0 - np.sqrt(ratio(cs.holdout_by_fold[i], base.holdout_by_fold[i]))
                                     for i in (0, 1)))
             parts = rule(score, fold_min, 1.0 - np.sqrt(ratio(cs.holdout, base.holdout)),
-                          1.0 - np.sqrt(ratio(cs.fit, base.fit)))
+                         1.0 - np.sqrt(ratio(cs.fit, base.fit)), holdout_gain_needed(step.fit))
             scores.append(score)
             ok.append(parts[0] & parts[1] & parts[2])
         if counts is not None:

@@ -116,6 +116,13 @@ def fit_context(meas: Measurement, model: HarmonicDrive) -> FitContext:
 # --------------------------------------------------------------------------- stiffness split
 
 
+@functools.lru_cache(maxsize=32)  # an optimiser asks for the same structure at every pass
+def _nominal_split(geometry, wave_generator) -> tuple[float, float]:
+    """(structural, mesh-zone) compliance of the nominal structure with κ = 1 [rad/(N·m)]."""
+    chain = compliance_chain(geometry, wave_generator, 1.0)
+    return float(np.asarray(chain.structure)), float(np.asarray(chain.mesh_zone))
+
+
 def split_stiffness(model: HarmonicDrive, K0, ratio=1.0, e_cap: float = E_INF_CAP):
     """Model parameters that give low-load stiffness ``K0`` and high-load ``K∞ = ratio·K0``.
 
@@ -135,8 +142,10 @@ def split_stiffness(model: HarmonicDrive, K0, ratio=1.0, e_cap: float = E_INF_CA
     K0 = np.asarray(K0, dtype=float)
     ratio = np.broadcast_to(np.asarray(ratio, dtype=float), K0.shape)
     g, wg = model.geometry, model.wave_generator
-    chain = compliance_chain(g, wg, 1.0)
-    cs0, cm0 = float(np.asarray(chain.structure)), float(np.asarray(chain.mesh_zone))
+    try:
+        cs0, cm0 = _nominal_split(g, wg)
+    except TypeError:  # a batch geometry (arrays) cannot be a cache key
+        cs0, cm0 = _nominal_split.__wrapped__(g, wg)
     E0 = float(np.asarray(g.E))
     C0 = 1.0 / K0
     Cinf = 1.0 / (ratio * K0)

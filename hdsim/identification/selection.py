@@ -14,15 +14,21 @@ from dataclasses import dataclass
 import numpy as np
 
 from hdsim.identification.fit import FitResult, effective_n
+from hdsim.identification.residuals import whiteness
 
-__all__ = ["Candidate", "score_candidate", "rule", "rate_ambiguity", "explains_as_well", "near_tie", "separating",
-           "SEPARATING", "SCORE_THRESHOLD", "HOLDOUT_GAIN", "MIN_GAIN", "TIE_FRACTION",
+__all__ = ["Candidate", "score_candidate", "rule", "holdout_gain_needed", "rate_ambiguity", "explains_as_well", "near_tie", "separating",
+           "SEPARATING", "SCORE_THRESHOLD", "HOLDOUT_GAIN", "FLOOR_HOLDOUT_GAIN", "MIN_GAIN", "TIE_FRACTION",
            "STRONG_HOLDOUT_GAIN", "SHAPE_MARGIN", "RATE_PAIR"]
 
 #: accept only below this score (ΔBIC with the effective sample size)
 SCORE_THRESHOLD = -10.0
 #: hold-out prediction error, both folds pooled, must fall by at least this fraction
 HOLDOUT_GAIN = 0.05
+#: ... and by this much once the residual is at the noise floor (rms within
+#: `hdsim.identification.residuals.EXPLAINED_RATIO` of it): a family can then only remove
+#: the little structure left, and an imperfect form's proxy removes a few per cent of it
+#: (zoo: a backlash after damping with an exponential hardening, 7 %)
+FLOOR_HOLDOUT_GAIN = 0.10
 #: rms error on all rows must fall by at least this fraction
 MIN_GAIN = 0.05
 #: near-tie: runner-up within max(10, this fraction of |best score|)
@@ -98,11 +104,17 @@ class Candidate:
                 "rmse_gain": self.gain, "passes": self.accepted, "why": self.reason}
 
 
-def rule(score, fold_gain_min, pooled, gain):
+def rule(score, fold_gain_min, pooled, gain, holdout_gain: float = HOLDOUT_GAIN):
     """The three conditions of step 4 (numpy-vectorised, for the bootstrap of `_confidence`):
     evidence (score, or a strong hold-out gain on both folds), hold-out gain, rms gain."""
     return ((score < SCORE_THRESHOLD) | (fold_gain_min >= STRONG_HOLDOUT_GAIN),
-            pooled >= HOLDOUT_GAIN, gain >= MIN_GAIN)
+            pooled >= holdout_gain, gain >= MIN_GAIN)
+
+
+def holdout_gain_needed(base_fit: FitResult) -> float:
+    """The pooled hold-out gain a candidate needs against ``base_fit``: `HOLDOUT_GAIN`, or
+    `FLOOR_HOLDOUT_GAIN` when that residual is already at its noise floor."""
+    return FLOOR_HOLDOUT_GAIN if whiteness(base_fit.residual)["explained"] else HOLDOUT_GAIN
 
 
 def rate_ambiguity(best: Candidate, scored: list, current: dict):
@@ -158,12 +170,14 @@ def score_candidate(family: str, effect_id: str, res: list, base) -> Candidate:
     pooled = 1.0 - math.sqrt(pooled_c / pooled_b) if pooled_b > 0 else 0.0
     gain = 1.0 - fit_all.rmse_rad / base.fit.rmse_rad if base.fit.rmse_rad > 0 else 0.0
     fold_min = min(gains) if len(gains) == 2 else -math.inf
-    evidence, holds_out, lowers = rule(score, fold_min, pooled, gain)
+    needed = holdout_gain_needed(base.fit)
+    evidence, holds_out, lowers = rule(score, fold_min, pooled, gain, needed)
     reasons = []
     if not evidence:
         reasons.append(f"score {score:.1f} not below {SCORE_THRESHOLD:g}")
     if not holds_out:
-        reasons.append(f"hold-out error falls by only {100 * pooled:.1f} %")
+        reasons.append(f"hold-out error falls by only {100 * pooled:.1f} %"
+                       + (f" ({100 * needed:.0f} % needed at the noise floor)" if needed > HOLDOUT_GAIN else ""))
     if not lowers:
         reasons.append(f"rms error falls by only {100 * gain:.1f} %")
     ok = not reasons

@@ -3,7 +3,7 @@
 The numpy loop of `hdsim.simulation.quasistatic` steps every parameter set of a batch
 in lockstep, so each sample costs some forty numpy calls whatever the batch size:
 Python's overhead, not arithmetic, sets its speed. Here the same step (the same torque
-balance, fitted damping rate, Newton iteration with its bracket, friction advance) runs
+balance, fitted damping rate, Newton iteration with its bracket, friction step) runs
 as scalar code per parameter set, through the laws' compiled twins
 (`hdsim.model.effects.kernels`, chosen by each effect's `Effect.compiled`). The
 parameter sets are independent, so they are also spread over the cores.
@@ -31,14 +31,13 @@ _ROW = types.float64[::1]
 _MATRIX = types.float64[:, ::1]
 _READ_ROW = types.Array(types.float64, 1, "C", readonly=True)  # a measurement's samples are read-only
 
-_NEWTON = types.UniTuple(_F8, 4)(FUNCTION_TYPES["spring"], FUNCTION_TYPES["advance"],
-                                 FUNCTION_TYPES["friction_torque"], _ROW, _ROW, _F8, _ROW, _ROW, _F8, _F8,
-                                 _F8, _F8, _F8, _F8, _F8, _I8, _F8)
+_NEWTON = types.UniTuple(_F8, 4)(FUNCTION_TYPES["spring"], FUNCTION_TYPES["friction_step"], _ROW, _ROW, _F8, _ROW,
+                                 _ROW, _F8, _F8, _F8, _F8, _F8, _F8, _F8, _I8, _F8)
 
 
-@njit(_NEWTON, cache=True)
-def _newton(spring, advance, friction_torque, ph, pf, e0, s0, s_out, guess, torque, cb, gdT,
-            tol_T, x_tol, dg_floor, max_iter, x_scale):
+@njit(_NEWTON, cache=True, error_model="numpy")
+def _newton(spring, friction_step, ph, pf, e0, s0, s_out, guess, torque, cb, gdT, tol_T, x_tol, dg_floor,
+            max_iter, x_scale):
     """One step's balance ``u(e) + friction(e) + cb (e − e0) + gdT = T`` by Newton's method.
 
     The scalar form of `hdsim.simulation.quasistatic._solve`: plain Newton steps first,
@@ -51,10 +50,8 @@ def _newton(spring, advance, friction_torque, ph, pf, e0, s0, s_out, guess, torq
     g = step = math.nan
     u = k = 0.0
     for it in range(max_iter):
-        advance(s0, e0, x, pf, s_out)
-        d = 1.0 if x - e0 >= 0.0 else -1.0
         u, k = spring(x, ph)
-        torque_f, slope_f = friction_torque(s_out, d, pf)
+        torque_f, slope_f = friction_step(s0, e0, x, 1.0 if x - e0 >= 0.0 else -1.0, pf, s_out)
         g = u + torque_f + cb * (x - e0) + gdT - torque
         dg = k + slope_f + cb
         step = -g / max(dg, dg_floor)
@@ -77,16 +74,15 @@ def _newton(spring, advance, friction_torque, ph, pf, e0, s0, s_out, guess, torq
         if abs(step) <= x_tol:
             break
     solved = (abs(step) <= x_tol or abs(g) <= tol_T) and math.isfinite(x)
-    advance(s0, e0, x, pf, s_out)
+    friction_step(s0, e0, x, 1.0, pf, s_out)
     return x, u, k, 1.0 if solved else 0.0
 
 
-@njit(types.void(FUNCTION_TYPES["spring"], FUNCTION_TYPES["advance"], FUNCTION_TYPES["friction_torque"],
-                 FUNCTION_TYPES["damping"], _MATRIX, _MATRIX, _MATRIX, _ROW, _ROW, _ROW, _F8, _F8, _I8,
-                 _I8, _MATRIX, types.float64[:, :, ::1], types.int64[::1]),
-      cache=True, parallel=True)
-def _run(spring, advance, friction_torque, damping, PH, PF, PD, k0, tg, Tg, tol_T, x_tol, max_iter,
-         n_states, E, S, failed):
+@njit(types.void(FUNCTION_TYPES["spring"], FUNCTION_TYPES["friction_step"], FUNCTION_TYPES["damping"], _MATRIX,
+                 _MATRIX, _MATRIX, _ROW, _ROW, _ROW, _F8, _F8, _I8, _I8, _MATRIX, types.float64[:, :, ::1],
+                 types.int64[::1]),
+      cache=True, parallel=True, error_model="numpy")
+def _run(spring, friction_step, damping, PH, PF, PD, k0, tg, Tg, tol_T, x_tol, max_iter, n_states, E, S, failed):
     M, N = E.shape
     for i in prange(M):
         ph, pf, pd = PH[i], PF[i], PD[i]
@@ -94,8 +90,8 @@ def _run(spring, advance, friction_torque, damping, PH, PF, PD, k0, tg, Tg, tol_
         s_new = np.zeros(n_states)
         keep = S.shape[1] == N  # the caller wants the states at every step
         dg_floor = 1e-6 * k0[i]
-        e, u, k, ok = _newton(spring, advance, friction_torque, ph, pf, 0.0, s, s_new, Tg[0] / k0[i], Tg[0],
-                              0.0, 0.0, tol_T, x_tol, dg_floor, max_iter, abs(Tg[0]) / k0[i])
+        e, u, k, ok = _newton(spring, friction_step, ph, pf, 0.0, s, s_new, Tg[0] / k0[i], Tg[0], 0.0, 0.0,
+                              tol_T, x_tol, dg_floor, max_iter, abs(Tg[0]) / k0[i])
         s[:] = s_new
         failed[i] = -1 if ok else 0
         E[i, 0] = e
@@ -111,13 +107,14 @@ def _run(spring, advance, friction_torque, damping, PH, PF, PD, k0, tg, Tg, tol_
             cb = gdT = 0.0
             c = damping(k / k0[i], pd)
             if c > 0.0:
-                _, slope_f = friction_torque(s, 1.0 if dT >= 0.0 else -1.0, pf)
+                # the body's path tangent at the start of the step (a step of zero twist)
+                _, slope_f = friction_step(s, e, e, 1.0 if dT >= 0.0 else -1.0, pf, s_new)
                 mu = (k + slope_f) * h / c
                 beta = mu / math.expm1(mu) if mu < 700.0 else 0.0
                 gamma = (1.0 - beta) / mu if mu > 1e-4 else 0.5 - mu / 6.0
                 cb, gdT = c * beta / h, gamma * dT
-            e_new, u, k, ok = _newton(spring, advance, friction_torque, ph, pf, e, s, s_new, guess, Tg[j], cb,
-                                      gdT, tol_T, x_tol, dg_floor, max_iter, abs(dT) / k0[i])
+            e_new, u, k, ok = _newton(spring, friction_step, ph, pf, e, s, s_new, guess, Tg[j], cb, gdT, tol_T,
+                                      x_tol, dg_floor, max_iter, abs(dT) / k0[i])
             s[:] = s_new
             if not ok:
                 failed[i] = j
@@ -128,7 +125,7 @@ def _run(spring, advance, friction_torque, damping, PH, PF, PD, k0, tg, Tg, tol_
 
 
 @njit(types.float64[:, ::1](types.int64[::1], _ROW, _MATRIX, _READ_ROW, _ROW, FUNCTION_TYPES["gap_twist"], _MATRIX),
-      cache=True, parallel=True)
+      cache=True, parallel=True, error_model="numpy")
 def _output(left, weight, E, T, k0, gap_twist, PB):
     M = E.shape[0]
     out = np.empty((M, T.size))
@@ -145,8 +142,7 @@ class CompiledLaws:
     """The compiled twins of a plan's laws (`Effect.compiled`) and their parameter rows."""
 
     spring: object
-    advance: object
-    friction_torque: object
+    friction_step: object
     damping: object
     gap_twist: object
     rows: tuple  # (hardening, friction, damping, backlash) parameter rows, (M, p) each
@@ -160,8 +156,8 @@ def compiled_laws(plan) -> CompiledLaws | None:
              for effect in (plan.hardening, plan.friction, plan.damping, plan.backlash)]
     if any(form is None for form in forms):
         return None
-    (spring,), (advance, friction_torque), (damping,), (gap_twist,) = (functions for functions, _ in forms)
-    return CompiledLaws(spring, advance, friction_torque, damping, gap_twist, tuple(rows for _, rows in forms),
+    (spring,), (friction_step,), (damping,), (gap_twist,) = (functions for functions, _ in forms)
+    return CompiledLaws(spring, friction_step, damping, gap_twist, tuple(rows for _, rows in forms),
                         np.ascontiguousarray(1.0 / (plan.c_struct + plan.c_mesh), dtype=float),
                         len(plan.friction.state_names))
 
@@ -178,7 +174,7 @@ def step_loop(laws: CompiledLaws, tg, Tg, tol_T, x_tol, max_iter, want_states):
     # out one at a time instead of in equal halves
     previous = set_parallel_chunksize(1)
     try:
-        _run(laws.spring, laws.advance, laws.friction_torque, laws.damping, ph, pf, pd, laws.k0,
+        _run(laws.spring, laws.friction_step, laws.damping, ph, pf, pd, laws.k0,
              np.ascontiguousarray(tg, dtype=float), np.ascontiguousarray(Tg, dtype=float), float(tol_T),
              float(x_tol), int(max_iter), laws.n_states, E, S, failed)
     finally:

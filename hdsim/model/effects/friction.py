@@ -67,10 +67,6 @@ class Friction(Effect):
         """
         return ()
 
-    def memory_torque(self):
-        """Torque scale [N·m] within which the memory turns over after a reversal."""
-        return 0.0
-
     # -------------------------------------------------------------- derived
     def body_torque(self, spring, body_twist, states):
         """``(B, u, K_t)``: body torque without the damper, spring torque and tangent."""
@@ -149,7 +145,7 @@ class NoFriction(Friction):
         if not self.keeps_law_of(NoFriction, _LAW):
             return None
         from hdsim.model.effects import kernels
-        return (kernels.no_advance, kernels.no_friction_torque), parameter_rows(size)
+        return (kernels.no_friction,), parameter_rows(size)
 
 
 class _DahlLaw(Friction):
@@ -178,9 +174,6 @@ class _DahlLaw(Friction):
         z = _states(states)[0]
         return (fr.dahl_slope(z, np.sign(body_rate), sigma, F) * body_rate,)
 
-    def memory_torque(self):
-        return np.max(self._law()[1])
-
     def advance(self, states, start, end, spring):
         # exact: for a fixed direction z relaxes exponentially towards ±F over F/σ of twist
         decay, F = self._decay
@@ -197,7 +190,7 @@ class _DahlLaw(Friction):
             return None
         from hdsim.model.effects import kernels
         decay, F = self._decay
-        return (kernels.dahl_advance, kernels.dahl_torque), parameter_rows(size, decay, F, self._law()[0])
+        return (kernels.dahl_step,), parameter_rows(size, decay, F, self._law()[0])
 
     def quasistatic(self, states, start, end, spring):
         # the generic step without its layers (Dahl has no series slip, its torque is its
@@ -332,9 +325,6 @@ class MaxwellSlip(Friction):
         k, f, _ = self._elements(states)
         return tuple(fr.maxwell_slip_rates(states, body_rate, k, f, self.velocity_scale))
 
-    def memory_torque(self):
-        return np.max(self.slip_torque_max)
-
     def advance(self, states, start, end, spring):
         # exact elasto-plastic elements: deflect with the body, stop at f_i/k_i
         states = _states(states)
@@ -353,7 +343,7 @@ class MaxwellSlip(Friction):
             return None
         from hdsim.model.effects import kernels
         columns = [row for column in self._columns for row in np.broadcast_to(column, (self.n_elements, size))]
-        return (kernels.maxwell_slip_advance, kernels.maxwell_slip_torque), parameter_rows(size, *columns)
+        return (kernels.maxwell_slip_step,), parameter_rows(size, *columns)
 
     def free_parameters(self, context: FitContext):
         t = context.max_torque
@@ -401,9 +391,6 @@ class DahlSlip(Friction):
         torque, reach, stiffness = self._law(states)
         return tuple(fr.dahl_slip_rates(states, body_rate, spring_tangent, spring_torque, torque, reach,
                                         stiffness, 0.02 * reach, self.velocity_scale))
-
-    def memory_torque(self):
-        return np.max(self.slip_torque)
 
     def free_parameters(self, context: FitContext):
         t = context.max_torque

@@ -27,36 +27,35 @@ _ROW = types.float64[::1]
 
 #: spring law of the hardening family: (torque [N·m], tangent [N·m/rad]) at body twist e
 SPRING = types.UniTuple(_F8, 2)(_F8, _ROW)
-#: friction states after the body twist moves monotonically from e0 to e, written to ``out``
-ADVANCE = types.void(_ROW, _F8, _F8, _ROW, _ROW)
-#: (parallel friction torque [N·m], its slope along the path [N·m/rad]) of states s moving in direction d
-FRICTION_TORQUE = types.UniTuple(_F8, 2)(_ROW, _F8, _ROW)
+#: the friction states after the body twist moves monotonically from e0 to e (written to
+#: ``out``), and their (parallel torque [N·m], slope along the path [N·m/rad]) moving in
+#: direction d: one call per Newton iteration (each call through a function pointer costs)
+FRICTION_STEP = types.UniTuple(_F8, 2)(_ROW, _F8, _F8, _F8, _ROW, _ROW)
 #: viscous coefficient [N·m·s/rad] where the tangent stiffness is ratio·K₀
 DAMPING = _F8(_F8, _ROW)
 #: angle of the dead zone [rad] that carries the contact twist v = T/K₀
 GAP_TWIST = _F8(_F8, _ROW)
 
-FUNCTION_TYPES = {"spring": types.FunctionType(SPRING), "advance": types.FunctionType(ADVANCE),
-                  "friction_torque": types.FunctionType(FRICTION_TORQUE),
+FUNCTION_TYPES = {"spring": types.FunctionType(SPRING), "friction_step": types.FunctionType(FRICTION_STEP),
                   "damping": types.FunctionType(DAMPING), "gap_twist": types.FunctionType(GAP_TWIST)}
 
 
 # --------------------------------------------------------------------------- hardening
 
 
-@njit(SPRING, cache=True)
+@njit(SPRING, cache=True, error_model="numpy")
 def linear_spring(e, p):
     """``T = K₀ e``; p = (K₀,)."""
     return p[0] * e, p[0]
 
 
-@njit(_F8(_F8, _F8), cache=True)
+@njit(_F8(_F8, _F8), cache=True, error_model="numpy")
 def _softplus(x, width):
     z = x / width
     return width * (max(z, 0.0) + math.log1p(math.exp(-abs(z))))
 
 
-@njit(SPRING, cache=True)
+@njit(SPRING, cache=True, error_model="numpy")
 def smooth_three_segment_spring(e, p):
     """`hdsim.physics.stiffness.smooth_three_segment_torque` and its tangent;
     p = (T1, T2, K1, K2, K3, width)."""
@@ -70,7 +69,7 @@ def smooth_three_segment_spring(e, p):
     return math.copysign(1.0, e) * torque if e != 0.0 else 0.0, tangent
 
 
-@njit(SPRING, cache=True)
+@njit(SPRING, cache=True, error_model="numpy")
 def tanh_spring(e, p):
     """`hdsim.physics.stiffness.tanh_hardening_torque` and its tangent; p = (K₀, K∞, φ_s)."""
     K0, K_inf, scale = p[0], p[1], p[2]
@@ -82,50 +81,36 @@ def tanh_spring(e, p):
 # --------------------------------------------------------------------------- friction
 
 
-@njit(ADVANCE, cache=True)
-def no_advance(s0, e0, e, p, out):
-    """No friction states."""
-
-
-@njit(FRICTION_TORQUE, cache=True)
-def no_friction_torque(s, d, p):
-    """No friction torque."""
+@njit(FRICTION_STEP, cache=True, error_model="numpy")
+def no_friction(s0, e0, e, d, p, out):
+    """No friction states, no torque."""
     return 0.0, 0.0
 
 
-@njit(ADVANCE, cache=True)
-def dahl_advance(s0, e0, e, p, out):
-    """Exact Dahl state over a monotone twist step; p = (σ/F or 0, F, σ)."""
+@njit(FRICTION_STEP, cache=True, error_model="numpy")
+def dahl_step(s0, e0, e, d, p, out):
+    """Exact Dahl state over a monotone twist step, its torque (the state) and slope
+    ``σ max(1 − z d/F, 0)``; p = (σ/F or 0, F, σ)."""
     step = e - e0
     target = math.copysign(p[1], step)
-    out[0] = target - (target - s0[0]) * math.exp(-p[0] * abs(step))
+    z = target - (target - s0[0]) * math.exp(-p[0] * abs(step))
+    out[0] = z
+    return z, p[2] * max(1.0 - z / p[1] * d, 0.0)
 
 
-@njit(FRICTION_TORQUE, cache=True)
-def dahl_torque(s, d, p):
-    """Dahl torque (its state) and slope ``σ max(1 − z d/F, 0)``."""
-    return s[0], p[2] * max(1.0 - s[0] / p[1] * d, 0.0)
-
-
-@njit(ADVANCE, cache=True)
-def maxwell_slip_advance(s0, e0, e, p, out):
-    """Elasto-plastic elements; p = (k_1…k_n, f_1…f_n, reach_1…reach_n)."""
+@njit(FRICTION_STEP, cache=True, error_model="numpy")
+def maxwell_slip_step(s0, e0, e, d, p, out):
+    """Elasto-plastic elements stopped at their reach, ``Σ k_i z_i`` and the stiffness of
+    the elements not sliding in direction d; p = (k_1…k_n, f_1…f_n, reach_1…reach_n)."""
     n = s0.size
-    for i in range(n):
-        reach = p[2 * n + i]
-        out[i] = min(max(s0[i] + (e - e0), -reach), reach)
-
-
-@njit(FRICTION_TORQUE, cache=True)
-def maxwell_slip_torque(s, d, p):
-    """``Σ k_i z_i`` and the stiffness of the elements not sliding in direction d."""
-    n = s.size
     torque = 0.0
     slope = 0.0
     for i in range(n):
-        k, f = p[i], p[n + i]
-        torque += k * s[i]
-        if not d * s[i] * k >= f * (1.0 - 1e-9):
+        k, f, reach = p[i], p[n + i], p[2 * n + i]
+        z = min(max(s0[i] + (e - e0), -reach), reach)
+        out[i] = z
+        torque += k * z
+        if not d * z * k >= f * (1.0 - 1e-9):
             slope += k
     return torque, slope
 
@@ -133,12 +118,12 @@ def maxwell_slip_torque(s, d, p):
 # --------------------------------------------------------------------------- damping
 
 
-@njit(DAMPING, cache=True)
+@njit(DAMPING, cache=True, error_model="numpy")
 def no_damping(ratio, p):
     return 0.0
 
 
-@njit(DAMPING, cache=True)
+@njit(DAMPING, cache=True, error_model="numpy")
 def viscous_damping(ratio, p):
     """`hdsim.physics.damping.load_dependent_coefficient`; p = (c₀, share)."""
     return p[0] * (1.0 - p[1] + p[1] * ratio)
@@ -147,12 +132,12 @@ def viscous_damping(ratio, p):
 # --------------------------------------------------------------------------- backlash
 
 
-@njit(GAP_TWIST, cache=True)
+@njit(GAP_TWIST, cache=True, error_model="numpy")
 def no_gap_twist(v, p):
     return 0.0
 
 
-@njit(GAP_TWIST, cache=True)
+@njit(GAP_TWIST, cache=True, error_model="numpy")
 def dead_zone_gap_twist(v, p):
     """`hdsim.physics.backlash.inverse_smooth_dead_zone` minus v; p = (half gap h, rounding
     width w, e^(−h/w))."""
