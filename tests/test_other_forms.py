@@ -85,25 +85,26 @@ def _zoo_diagnosis(tmp_path, hidden, baseline, profile, seed):
 
 
 @pytest.mark.slow
-def test_a_kinked_hardening_changes_form_instead_of_a_proxy_after_the_gap(tmp_path):
+def test_a_kinked_hardening_behind_a_gap_gets_the_gap_and_no_proxy(tmp_path):
     """A hard gap with contact compliance behind a piecewise-linear hardening: the smooth
     hardening left a residual that damping absorbed after the backlash (added: backlash,
-    damping). The three segments explain it, and only the backlash is added."""
+    damping). The guard then changed the hardening to three segments. Since the
+    evaluator's grid stopped depending on the batch, the backlash candidate fits the gap
+    well enough (score −4714 instead of −1387) that no other form is needed. Either way,
+    only the backlash is added."""
     d = _zoo_diagnosis(tmp_path, {"backlash": "hard_gap"}, {"hardening": "piecewise"}, "unbalanced_rates", 9)
     assert d.added == ["backlash"]
-    assert [(r["family"], r["to"]) for r in d.reshaped] == [("hardening", "three_segment")]
     assert d.final.fit.rmse_rad < 0.6 * d.baseline.fit.rmse_rad
 
 
 @pytest.mark.slow
 def test_a_gap_that_closes_gradually_is_not_taken_for_damping(tmp_path):
     """A gap closing over 2-6 % of the rated torque: the dead zone with its fixed rounding
-    left a residual that damping absorbed. The dead zone with a fitted rounding explains
-    it better, and no damping is added."""
+    left a residual that damping absorbed. The guard then changed the dead zone to one
+    with a fitted rounding instead of adding damping. With fits of up to 25 iterations
+    the fixed-rounding dead zone leaves no residual that damping passes with (its score
+    −6 in the next round), so no other form is needed. Either way, only the backlash is
+    added."""
     d = _zoo_diagnosis(tmp_path, {"backlash": "closing_gap"}, {"hardening": "piecewise"}, "sine", 7)
     assert d.added == ["backlash"]
-    assert [(r["family"], r["to"], r["instead_of"]) for r in d.reshaped] == [("backlash", "gradual_dead_zone",
-                                                                              "damping")]
-    with_fixed_rounding = next(s for s in d.steps if s.effects == ["hardening", "backlash"])
-    assert d.final.fit.rmse_rad < 0.95 * with_fixed_rounding.fit.rmse_rad
-    assert d.final.fit.params["backlash.contact_rounding"] != pytest.approx(0.2, abs=1e-3)  # fitted
+    assert d.final.fit.rmse_rad < 0.5 * d.baseline.fit.rmse_rad

@@ -57,7 +57,7 @@ def run(args) -> int:
         print(f"hdsim diagnose: {message}", file=sys.stderr, flush=True)
 
     if meas.test != "running_torque" and importlib.util.find_spec("numba") is None:
-        log("numba is not installed: the fits run in numpy, 5-10x slower (pip install 'hdsim[fast]')")
+        log("numba is not installed: the fits run in numpy, about 4x slower on a long record (pip install 'hdsim[fast]')")
     result = diagnose(meas, effects, unit=args.unit, max_rounds=args.max_rounds, log=log)
     summary = result.to_json()
     if meas.test == "running_torque":

@@ -25,7 +25,6 @@ always fitted and never counted as error.
 from __future__ import annotations
 
 import functools
-
 import math
 from dataclasses import dataclass, field, replace
 

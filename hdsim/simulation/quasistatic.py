@@ -51,8 +51,9 @@ finite-difference Jacobian columns, in one pass over the samples.
 Every registered effect works here, including a law defined outside the package;
 `dynamic_locked_twist` is the reference with inertia. Where numba is installed and
 every law of a batch has a compiled twin (`Effect.compiled`), the same step runs
-compiled, one parameter set at a time (`hdsim.simulation.quasistatic_compiled`, 5–10×
-faster on a diagnosis); the numpy loop here is the reference it is tested against.
+compiled, one parameter set at a time (`hdsim.simulation.quasistatic_compiled`: a pass
+5–30× faster, a 20,000-row diagnosis 4×); the numpy loop here is the reference it is
+tested against.
 """
 
 from __future__ import annotations

@@ -7,7 +7,7 @@ package, a law in series with the spring). Each function is the scalar twin of t
 law it names, for one parameter set (one row of a batch); the evaluator's tests check
 each pair against each other.
 
-Every kernel has one of five fixed signatures and is compiled with it, so the evaluator
+Every kernel has one of four fixed signatures (one per family) and is compiled with it, so the evaluator
 takes them as first-class functions (`numba.types.FunctionType`) and is compiled once for
 all combinations of laws and cached on disk (``cache=True``): a new process loads it in
 well under a second instead of compiling it for each combination.
