@@ -108,3 +108,16 @@ def test_a_gap_that_closes_gradually_is_not_taken_for_damping(tmp_path):
     d = _zoo_diagnosis(tmp_path, {"backlash": "closing_gap"}, {"hardening": "piecewise"}, "sine", 7)
     assert d.added == ["backlash"]
     assert d.final.fit.rmse_rad < 0.5 * d.baseline.fit.rmse_rad
+
+@pytest.mark.slow
+def test_a_hard_gap_in_a_ke_run_changes_form_instead_of_taking_a_hardening_proxy(tmp_path):
+    """A kinematic-error run under a varying load through a hard gap with contact
+    compliance. Once the kinematic error is in, the dead zone with its fixed rounding
+    leaves a residual that a hardening (score −174) or a friction (−141) would absorb.
+    The dead zone with a fitted rounding explains it better (−226), so the backlash
+    changes form and no other family is added (zoo seed 33)."""
+    d = _zoo_diagnosis(tmp_path, {"kinematic_error": "varying_load"}, {"backlash": "hard_gap"}, "sine", 33)
+    assert d.added == ["kinematic_error"]
+    assert [(r["family"], r["to"], r["instead_of"]) for r in d.reshaped] == [("backlash", "gradual_dead_zone",
+                                                                              "hardening")]
+    assert d.final.fit.params["backlash.contact_rounding"] != pytest.approx(0.2, abs=1e-3)  # fitted

@@ -104,7 +104,8 @@ def run_case(group: str, seed: int, max_rows: int | None = None) -> dict:
     """One case: generate, write, read, examine, diagnose, assess; never raises."""
     d = design(group, seed)
     row = {"group": group, "seed": int(seed), "profile": d["profile"], "hidden": d["hidden"],
-           "baseline": d["baseline"], "test": None, "rows": None, "added": [], "ranking": [], "scores": [],
+           "baseline": d["baseline"], "test": None, "rows": None, "added": [], "reshaped": [], "ranking": [],
+           "scores": [],
            "ambiguous": [], "outcome": None, "next_measurement": None, "wrong_test": "",
            "baseline_rmse_rad": None, "final_rmse_rad": None, "success": None, "visibility": None,
            "secondary": {}, "noise_arcsec": None, "gen_seconds": None, "seconds": None, "error": None}
@@ -133,7 +134,8 @@ def run_case(group: str, seed: int, max_rows: int | None = None) -> dict:
             report = diagnose(meas, list(truth["baseline"]))
             j = report.to_json()
             outcome, nxt = assess(j, data)
-            row.update(added=list(j["added"]), ranking=[r["family"] for r in j["ranking"]],
+            row.update(added=list(j["added"]), reshaped=[f"{r['family']}={r['to']}" for r in j["reshaped"]],
+                       ranking=[r["family"] for r in j["ranking"]],
                        scores=[r.get("score") for r in j["ranking"]],
                        ambiguous=[a["families"] for a in j["ambiguous"]], outcome=outcome, next_measurement=nxt,
                        baseline_rmse_rad=j["baseline"]["rmse_rad"], final_rmse_rad=j["final"]["rmse_rad"],
