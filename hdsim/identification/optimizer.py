@@ -29,30 +29,25 @@ from hdsim.identification.problem import Evaluator, FitProblem
 __all__ = ["fit_many", "residuals", "bic", "lag1", "effective_n", "uncertainty", "FittedRows"]
 
 
-def project(target: np.ndarray, basis: np.ndarray, rows: np.ndarray):
-    """Least-squares coefficients of ``basis[rows]`` for every row of ``target[:, rows]``."""
-    return target[:, rows] @ np.linalg.pinv(basis[rows]).T
+def _on_rows(prob: FitProblem, a: np.ndarray) -> np.ndarray:
+    """``a`` (samples on its last axis) on the problem's fitted rows, without a copy when
+    they are all of them."""
+    return a if prob.row_index is None else np.take(a, prob.row_index, axis=-1)
 
 
 def residuals(ev: Evaluator, prob: FitProblem, twist: np.ndarray):
     """(residual on the problem's rows (M, n_rows), full residual (M, n), linear coefficients)."""
     target = ev.y_rel[None, :] - twist
-    coef = project(target, prob.basis, prob.rows)
+    coef = _on_rows(prob, target) @ prob.basis_pinv.T
     full = target - coef @ prob.basis.T
-    return full[:, prob.rows], full, coef
+    return _on_rows(prob, full), full, coef
 
 
 def row_residuals(ev: Evaluator, prob: FitProblem, twist: np.ndarray) -> np.ndarray:
     """The residual on the problem's rows alone (M, n_rows), as `residuals` gives it: the
     optimiser's every pass needs only these, and a fold's rows are a part of the record."""
-    rows = prob.row_index
-    if rows is None:
-        target = ev.y_rel[None, :] - twist
-        basis = prob.basis
-    else:
-        target = ev.y_rel[rows][None, :] - np.take(twist, rows, axis=1)
-        basis = prob.basis[rows]
-    return target - (target @ prob.basis_pinv.T) @ basis.T
+    target = _on_rows(prob, ev.y_rel)[None, :] - _on_rows(prob, twist)
+    return target - (target @ prob.basis_pinv.T) @ _on_rows(prob, prob.basis.T)
 
 
 def fit_many(ev: Evaluator, problems: list[FitProblem], *, tol: float = 1e-3, log=None) -> int:

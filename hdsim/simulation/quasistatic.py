@@ -313,9 +313,10 @@ def _locked_twist(plan, t, T, grid, tol, x_tol, max_iter, return_states, engine)
         # the body twist is smooth between steps; the dead-zone angle is exact at every sample
         x_out = module.output_twist(laws, t, tg, e_grid, T)
     else:
-        e_grid, s_out, failed = _numpy_steps(plan, tg, Tg, tol_T, x_tol, max_iter, return_states)
+        kern = _Kernel(plan)
+        e_grid, s_out, failed = _numpy_steps(kern, tg, Tg, tol_T, x_tol, max_iter, return_states)
         e_out = _interp_rows(t, tg, e_grid) if idx.size != t.size else e_grid
-        x_out = _Kernel(plan).output_twist(e_out, T)
+        x_out = kern.output_twist(e_out, T)
     n_states = len(plan.friction.state_names)
     if return_states and idx.size != t.size:
         s_out = np.array([_interp_rows(t, tg, rows) for rows in s_out]).reshape(n_states, plan.size, t.size)
@@ -342,11 +343,10 @@ def _compiled_laws(plan, engine):
     return quasistatic_compiled, laws
 
 
-def _numpy_steps(plan, tg, Tg, tol_T, x_tol, max_iter, return_states):
+def _numpy_steps(kern, tg, Tg, tol_T, x_tol, max_iter, return_states):
     """Body twist (M, G) and friction states (n_states, M, G) on the grid, all parameter
     sets in lockstep, and the first grid index each set failed at (−1: none)."""
-    kern = _Kernel(plan)
-    M, G = plan.size, tg.size
+    M, G = kern.plan.size, tg.size
     e_out = np.empty((M, G))
     s_out = np.empty((kern.n_states, M, G)) if return_states else None
     k0 = kern.k0

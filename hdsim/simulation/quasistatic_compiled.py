@@ -21,7 +21,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit, prange, set_parallel_chunksize, types
+from numba import njit, prange, types
 
 from hdsim.model.effects.kernels import FUNCTION_TYPES
 
@@ -170,15 +170,8 @@ def step_loop(laws: CompiledLaws, tg, Tg, tol_T, x_tol, max_iter, want_states):
     E = np.empty((size, tg.size))
     S = np.zeros((size, tg.size if want_states else 1, laws.n_states))
     failed = np.full(size, -1, dtype=np.int64)
-    # parameter sets differ in cost (a damped candidate beside an undamped one): hand them
-    # out one at a time instead of in equal halves
-    previous = set_parallel_chunksize(1)
-    try:
-        _run(laws.spring, laws.friction_step, laws.damping, ph, pf, pd, laws.k0,
-             np.ascontiguousarray(tg, dtype=float), np.ascontiguousarray(Tg, dtype=float), float(tol_T),
-             float(x_tol), int(max_iter), laws.n_states, E, S, failed)
-    finally:
-        set_parallel_chunksize(previous)
+    _run(laws.spring, laws.friction_step, laws.damping, ph, pf, pd, laws.k0, np.ascontiguousarray(tg, dtype=float),
+         np.ascontiguousarray(Tg, dtype=float), float(tol_T), float(x_tol), int(max_iter), laws.n_states, E, S, failed)
     return E, (np.moveaxis(S, 2, 0) if want_states else None), failed
 
 
