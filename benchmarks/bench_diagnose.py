@@ -11,8 +11,8 @@ diagnose`` runs as a user would run it (a subprocess of the console entry point)
 ``--max-rounds 2`` holds it to at most two additions. Round 1 tries hardening, backlash and
 damping, each on all rows and on two hold-out folds, warm and fresh, in one lockstep
 (`hdsim.identification.optimizer.fit_many`), and adds hardening after the friction in
-its other form (Maxwell-slip) failed to explain the residual; round 2 finds nothing that
-passes (backlash and damping both score above zero) and stops.
+its other forms (Maxwell-slip, distributed slip) failed to explain the residual; round 2
+finds nothing that passes (backlash and damping both score above zero) and stops.
 The target is 10 s on the project's 2-core machine; the JSON line says how far off it is.
 The cost was the quasi-static evaluator's loop over the samples, one pass per optimiser
 tick (``passes``); it is compiled now when numba is installed (``hdsim[fast]``, part of

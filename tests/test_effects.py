@@ -56,6 +56,7 @@ SAMPLE = {  # one physically sensible parameter set per effect of the registry
     ("friction", "dahl"): dict(torque_max=1.0, sigma=3 * K1),
     ("friction", "coulomb"): {f: v for f, v in dataclasses.asdict(coulomb(0.5)).items()},
     ("friction", "maxwell_slip"): dict(k_total=K1, slip_torque_max=2.0, velocity_scale=1e-6),
+    ("friction", "distributed_slip"): dict(slip_torque=3.0, slip_max=1e-4, spread=0.4),
     ("damping", "viscous"): dict(coefficient=1.0),
     ("kinematic_error", "fourier"): dict(a1=1e-5, a2=3e-5, a4=5e-6, p1=0.1, p2=0.2, p4=0.3,
                                          a_out=2e-5, p_out=0.0, load_gain=0.1),

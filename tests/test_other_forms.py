@@ -121,3 +121,30 @@ def test_a_hard_gap_in_a_ke_run_changes_form_instead_of_taking_a_hardening_proxy
     assert [(r["family"], r["to"], r["instead_of"]) for r in d.reshaped] == [("backlash", "gradual_dead_zone",
                                                                               "hardening")]
     assert d.final.fit.params["backlash.contact_rounding"] != pytest.approx(0.2, abs=1e-3)  # fitted
+
+
+# --------------------------------------------------------------------------- friction in series (slow)
+
+
+@pytest.mark.slow
+def test_preisach_friction_enters_in_series_without_a_hardening_proxy(tmp_path):
+    """Preisach friction (relays with an interaction spread, tests/truth_zoo_forms.py) behind
+    an asymmetric gap and a load-dependent damping. Fitted with Dahl beside the spring, the
+    loop is taken for a hardening (added alone: −22 against friction +2.9). Friction now
+    also enters in series with the spring and is added in that form, alone (zoo seed 33)."""
+    d = _zoo_diagnosis(tmp_path, {"friction": "preisach"}, {"backlash": "asymmetric_gap",
+                                                            "damping": "load_dependent"}, "triangle_many", 33)
+    assert d.added == ["friction"]
+    assert d.final.fit.effects["friction"] == "distributed_slip"
+    assert d.final.fit.rmse_rad < 0.8 * d.baseline.fit.rmse_rad
+
+
+@pytest.mark.slow
+def test_a_hard_gap_is_not_taken_for_slip_at_zero_torque(tmp_path):
+    """A hard gap with contact compliance on a 2 kHz record: with its switching torque free
+    down to zero, distributed slip drew the gap as relays switching at 0.05 % of the peak
+    torque with the widest spread, and won the round (−15498 against the dead zone's
+    −10044). Its median switching torque is now held above 5 % of the peak torque, and
+    the backlash is added (zoo seed 37)."""
+    d = _zoo_diagnosis(tmp_path, {"backlash": "hard_gap"}, {}, "long_2kHz", 37)
+    assert d.added == ["backlash"]

@@ -43,7 +43,8 @@ def _model(**effects):
 HARDENING = [fx.NO_EFFECT["hardening"], fx.TanhHardening(e_inf=2.5, T_s=30.0),
              fx.ThreeSegmentHardening(T1=10.0, T2=40.0, e2=1.5, e3=2.5)]
 FRICTION = [fx.NO_EFFECT["friction"], fx.DahlFriction(torque_max=4.0, sigma=2 * K), fx.CoulombFriction(torque=3.0),
-            fx.MaxwellSlip(k_total=K, slip_torque_max=6.0, velocity_scale=1e-6)]
+            fx.MaxwellSlip(k_total=K, slip_torque_max=6.0, velocity_scale=1e-6),
+            fx.DistributedSlip(slip_torque=8.0, slip_max=2e-4, spread=0.5)]
 DAMPING = [fx.NO_EFFECT["damping"], fx.ViscousDamping(coefficient=300.0, stiffness_share=0.5)]
 BACKLASH = [fx.NO_EFFECT["backlash"], fx.DeadZoneBacklash(gap=1.5e-4), fx.GradualDeadZone(gap=1e-4, contact_rounding=2.0)]
 
@@ -71,22 +72,41 @@ def test_each_spring_law_equals_its_numpy_law(law):
 @pytest.mark.parametrize("law", FRICTION, ids=lambda e: e.id)
 def test_each_friction_law_advances_and_bends_as_its_numpy_law(law):
     (friction_step,), rows = _kernel(law)
+    hardening = HARDENING[1]  # a law beside or in series with a hardening spring
+    (spring_c,), spring_rows = _kernel(hardening)
+    spring = hardening.spring_law(C_STRUCT, C_MESH)
     n = len(law.state_names)
-    spring = fx.NO_EFFECT["hardening"].spring_law(C_STRUCT, C_MESH)
     states = np.zeros((n, 1))
     e0 = 0.0
     for e in np.cumsum(RNG.normal(0, 2e-4, 300)):  # a random walk: reversals of every size
         out = np.zeros(n)
         direction = 1.0 if e >= e0 else -1.0
-        torque, slope = friction_step(states[:, 0].copy(), e0, float(e), direction, rows[0], out)
-        reference = law.advance(states, np.array([e0]), np.array([e]), spring)
-        np.testing.assert_allclose(out, np.asarray(reference)[:, 0], rtol=1e-12, atol=1e-14)
-        u, k = spring(e)
-        assert torque == pytest.approx(float(np.asarray(law.parallel_torque(reference))[0] if n else 0.0),
-                                       rel=1e-12, abs=1e-12)
-        tangent = float(np.asarray(law.path_tangent(reference, direction, u, k)).reshape(-1)[0])
-        assert k + slope == pytest.approx(tangent, rel=1e-12)
-        states, e0 = np.asarray(reference, dtype=float).reshape(n, 1), float(e)
+        body, slope, u, k = friction_step(spring_c, spring_rows[0], states[:, 0].copy(), e0, float(e), direction,
+                                          rows[0], out)
+        B, D, reference, u_ref, k_ref = law.quasistatic(states, np.array([e0]), np.array([e]), spring)
+        reference = np.asarray(reference, dtype=float).reshape(n, 1)
+        np.testing.assert_allclose(out, reference[:, 0], rtol=1e-10, atol=1e-14)
+        assert body == pytest.approx(float(np.asarray(B).reshape(-1)[0]), rel=1e-10, abs=1e-10)
+        assert slope == pytest.approx(float(np.asarray(D).reshape(-1)[0]), rel=1e-10)
+        assert (u, k) == pytest.approx((float(np.asarray(u_ref).reshape(-1)[0]),
+                                        float(np.asarray(k_ref).reshape(-1)[0])), rel=1e-10, abs=1e-10)
+        states, e0 = reference, float(e)
+
+
+def test_the_series_law_counts_the_relays_on_their_curve_in_a_step_of_zero_length():
+    # the slope the damping's rate uses: a step of zero twist must see the relays that
+    # slip on as the load goes on, in both engines
+    law = FRICTION[4]
+    (friction_step,), rows = _kernel(law)
+    (spring_c,), spring_rows = _kernel(HARDENING[0])
+    spring = HARDENING[0].spring_law(C_STRUCT, C_MESH)
+    e = 12.0 / K  # past the median threshold: relays on their curve
+    _, _, states, u, k = law.quasistatic(np.zeros((6, 1)), np.array([0.0]), np.array([e]), spring)
+    states = np.asarray(states, dtype=float)
+    tangent = float(np.asarray(law.path_tangent(states, 1.0, u, k)).reshape(-1)[0])
+    _, slope, _, _ = friction_step(spring_c, spring_rows[0], states[:, 0].copy(), e, e, 1.0, rows[0], np.zeros(6))
+    assert tangent < 0.9 * float(np.asarray(k).reshape(-1)[0])  # the slip softens the body
+    assert slope == pytest.approx(tangent, rel=1e-9)
 
 
 @pytest.mark.parametrize("law", DAMPING, ids=lambda e: e.id)
@@ -112,11 +132,12 @@ COMBINATIONS = [dict(hardening=h, friction=f, damping=d, backlash=b)
                 for h, f, d, b in [(HARDENING[1], FRICTION[1], DAMPING[1], BACKLASH[1]),
                                    (HARDENING[2], FRICTION[3], DAMPING[1], BACKLASH[2]),
                                    (HARDENING[0], FRICTION[2], DAMPING[0], BACKLASH[0]),
+                                   (HARDENING[2], FRICTION[4], DAMPING[1], BACKLASH[1]),
                                    (HARDENING[0], FRICTION[0], DAMPING[0], BACKLASH[0])]]
 
 
 @pytest.mark.parametrize("effects", COMBINATIONS, ids=["tanh-dahl-viscous-gap", "3seg-maxwell-viscous-gradual",
-                                                       "coulomb", "bare"])
+                                                       "coulomb", "3seg-distributed-viscous-gap", "bare"])
 def test_the_engines_give_one_twist(effects):
     t, T = _profile()
     model = _model(**effects)

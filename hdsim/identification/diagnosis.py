@@ -8,10 +8,13 @@ Procedure
    ten wave-generator revolutions, so that each fold holds both load directions). A fold
    fit minimises the residual on its own rows only; the other fold's rows are its hold-out.
 2. For every family not yet in the model, add its effect (the family's default effect,
-   or the one named in ``candidates``) and refit all rows and both folds, each from the baseline's values and afresh (the
-   lower optimum counts). All the fits of a round run in lockstep in one batched pass per
-   iteration (`hdsim.identification.fit.fit_many`): a pass costs about the same whatever
-   it holds, so a round costs about as many passes as its slowest fit.
+   or the one named in ``candidates``, and its `Effect.entry_forms`: friction enters both
+   beside the spring, Dahl, and in series with it, distributed micro-slip, the best
+   passing form standing for the family) and refit all rows and both folds, each from
+   the baseline's values and afresh (the lower optimum counts). All the fits of a round
+   run in lockstep in one batched pass per iteration (`hdsim.identification.fit.fit_many`):
+   a pass costs about the same whatever it holds, so a round costs about as many passes
+   as its slowest fit.
 3. Score each candidate by the change of an information criterion, BIC computed with an
    *effective* sample size::
 
@@ -34,9 +37,9 @@ Procedure
    passes, or when the residual is explained (white, or at the noise floor).
 5. *Other forms* (the proxy guard): before the best candidate is added, every family
    already in the model is refitted in its other forms (`Effect.other_forms`: the smooth
-   hardening and the catalog's three segments, Dahl friction and Maxwell-slip elements,
-   a dead zone with fixed and with fitted rounding), in one more lockstep, scored the
-   same way. An imperfect shape leaves a structured residual that another family
+   hardening and the catalog's three segments, Dahl friction, Maxwell-slip elements and
+   distributed micro-slip, a dead zone with fixed and with fitted rounding), in one more
+   lockstep, scored the same way. An imperfect shape leaves a structured residual that another family
    absorbs in part (damping after a gap that closes gradually); when another form
    passes and scores better than the candidate by more than the tie margin, the family
    changes form instead and the next round starts from there (each family once). Within
@@ -313,8 +316,10 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
         # fold, each from the baseline's values and afresh. A pass costs about the same
         # whatever it holds (the evaluator's cost is its loop over the samples), so the
         # fold fits ride along instead of waiting for the all-rows optimum
-        trials = [(family, stand_in[family], {**current, family: stand_in[family]}) for family in todo]
+        trials = [(family, form, {**current, family: form}) for family in todo
+                  for form in _entry_forms(family, stand_in[family])]
         scored, n = _lockstep(trials, unit, meas, ev, masks, step, unit_name)
+        scored = _best_form_per_family(scored)
         passes += n
         step.candidates = scored
         ranked = sorted(scored, key=lambda c: c.score)
@@ -397,6 +402,23 @@ def _lockstep(trials: list, unit, meas, ev, masks, step: Step, unit_name: str) -
             continue
         scored.append(score_candidate(family, effect_id, res, step))
     return scored, passes
+
+
+def _entry_forms(family: str, effect_id: str) -> tuple:
+    """The forms a family is tried in when it enters: its stand-in and the stand-in's
+    `Effect.entry_forms`."""
+    return (effect_id,) + tuple(fx.effect_class(family, effect_id).entry_forms)
+
+
+def _best_form_per_family(scored: list) -> list:
+    """One candidate per family: the best-scoring form among those that pass, else the
+    best-scoring form (the rule that picks the round's addition, applied within a family)."""
+    best = {}
+    for c in scored:
+        held = best.get(c.family)
+        if held is None or (c.accepted, -c.score) > (held.accepted, -held.score):
+            best[c.family] = c
+    return list(best.values())
 
 
 def _other_forms(current: dict, done: set) -> list:

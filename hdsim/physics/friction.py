@@ -208,3 +208,103 @@ def maxwell_slip_torque(deflections, stiffnesses):
         Torque [N·m].
     """
     return np.sum(stiffnesses * deflections, axis=0)
+
+
+def relay_switch(torque, thresholds, half_widths):
+    """A smoothed relay's switching curve and its slope in the torque (Mayergoyz, 1991).
+
+    ``ρ(x) = x (3 − x²)/2`` for ``x = (T − c)/w`` in [−1, 1], −1 below and +1 above: the
+    relay turns from −1 to +1 over ``c ± w`` with a continuous slope, and is exactly
+    saturated outside that band.
+
+    Parameters
+    ----------
+    torque : float or array
+        Torque through the relay T [N·m].
+    thresholds : float or array
+        Switching torque c [N·m] (negative for the downward curve, ``−c``).
+    half_widths : float or array
+        Half-width of the switching band w [N·m], > 0.
+
+    Returns
+    -------
+    tuple
+        ``(ρ, dρ/dT [1/(N·m)])``.
+    """
+    x = np.clip((torque - thresholds) / half_widths, -1.0, 1.0)
+    return 0.5 * x * (3.0 - x * x), 1.5 * (1.0 - x * x) / half_widths
+
+
+def relay_slips_on_branch(slips, torque, direction, thresholds, half_widths, amplitudes):
+    """Relay slips after the torque moves monotonically in ``direction`` from where the
+    slips were to ``torque``, and their slopes in the torque.
+
+    Relay ``i`` holds ``s_i`` until its switching curve passes it, then follows it: rising,
+    ``s_i = max(s_i⁰, a_i ρ((T − c_i)/w_i))``; falling, ``min(s_i⁰, a_i ρ((T + c_i)/w_i))``.
+    The rule wipes out smaller excursions and returns to a branch where it left it
+    (return-point memory), as Preisach's relays do.
+
+    Parameters
+    ----------
+    slips : array
+        Relay slips s_i⁰ [rad], relay axis first.
+    torque : float or array
+        Torque at the end of the monotone move T [N·m].
+    direction : float or array
+        +1 rising, −1 falling.
+    thresholds, half_widths : array
+        Switching torques c_i > 0 and band half-widths w_i [N·m], relay axis first.
+    amplitudes : array
+        Slip range to each side a_i [rad].
+
+    Returns
+    -------
+    tuple
+        ``(slips [rad], dslip/dT [rad/(N·m)])``, relay axis first; the slope is zero for a
+        relay that holds.
+    """
+    rho, slope = relay_switch(torque, direction * thresholds, half_widths)
+    curve = amplitudes * rho
+    moved = direction * (curve - slips) > 0.0
+    return np.where(moved, curve, slips), np.where(moved, amplitudes * slope, 0.0)
+
+
+def relay_slip_rates(slips, twist_rate, elastic_tangent, elastic_torque, thresholds, half_widths, amplitudes,
+                     velocity_scale):
+    """Slip rates of smoothed relays in series with the spring (the ODE form of
+    `relay_slips_on_branch`).
+
+    A relay on its switching curve in the direction of motion slips at ``g_i Ṫ`` with
+    ``g_i = a_i ρ'``; one off its curve holds (the gate opens over 10⁻³ a_i as the curve
+    reaches it). Spring and relays carry the same torque, so compliances add:
+    ``Ṫ = δ̇ / (1/K_t + Σ g_j)``.
+
+    Parameters
+    ----------
+    slips : array
+        Relay slips s_i [rad], relay axis first.
+    twist_rate : float or array
+        Twist rate of the chain δ̇ [rad/s].
+    elastic_tangent, elastic_torque : float or array
+        Spring tangent K_t [N·m/rad] and the torque through the chain T [N·m].
+    thresholds, half_widths, amplitudes : array
+        As in `relay_slips_on_branch`.
+    velocity_scale : float or array
+        Smoothing velocity of the direction [rad/s].
+
+    Returns
+    -------
+    numpy.ndarray
+        Slip rate of each relay [rad/s], relay axis first.
+    """
+    rising = 0.5 * (1.0 + np.tanh(twist_rate / velocity_scale))
+    tol = 1e-3 * amplitudes + 1e-300  # a relay of no range (the neutral law) holds
+    g = 0.0
+    for direction, share in ((1.0, rising), (-1.0, 1.0 - rising)):
+        rho, slope = relay_switch(elastic_torque, direction * thresholds, half_widths)
+        # open where the curve has reached the slip (rising: curve >= slip)
+        gate = np.clip(direction * (amplitudes * rho - slips) / tol + 1.0, 0.0, 1.0)
+        g = g + share * gate * amplitudes * slope
+    spring_compliance = 1.0 / np.maximum(elastic_tangent, 1e-300)
+    torque_rate = twist_rate / (spring_compliance + np.sum(g, axis=0))
+    return torque_rate * g

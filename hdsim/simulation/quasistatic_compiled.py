@@ -50,10 +50,9 @@ def _newton(spring, friction_step, ph, pf, e0, s0, s_out, guess, torque, cb, gdT
     g = step = math.nan
     u = k = 0.0
     for it in range(max_iter):
-        u, k = spring(x, ph)
-        torque_f, slope_f = friction_step(s0, e0, x, 1.0 if x - e0 >= 0.0 else -1.0, pf, s_out)
-        g = u + torque_f + cb * (x - e0) + gdT - torque
-        dg = k + slope_f + cb
+        body, slope, u, k = friction_step(spring, ph, s0, e0, x, 1.0 if x - e0 >= 0.0 else -1.0, pf, s_out)
+        g = body + cb * (x - e0) + gdT - torque
+        dg = slope + cb
         step = -g / max(dg, dg_floor)
         if it >= 3:
             if it == 3:
@@ -74,7 +73,7 @@ def _newton(spring, friction_step, ph, pf, e0, s0, s_out, guess, torque, cb, gdT
         if abs(step) <= x_tol:
             break
     solved = (abs(step) <= x_tol or abs(g) <= tol_T) and math.isfinite(x)
-    friction_step(s0, e0, x, 1.0, pf, s_out)
+    friction_step(spring, ph, s0, e0, x, 1.0 if x - e0 >= 0.0 else -1.0, pf, s_out)
     return x, u, k, 1.0 if solved else 0.0
 
 
@@ -108,8 +107,8 @@ def _run(spring, friction_step, damping, PH, PF, PD, k0, tg, Tg, tol_T, x_tol, m
             c = damping(k / k0[i], pd)
             if c > 0.0:
                 # the body's path tangent at the start of the step (a step of zero twist)
-                _, slope_f = friction_step(s, e, e, 1.0 if dT >= 0.0 else -1.0, pf, s_new)
-                mu = (k + slope_f) * h / c
+                _, slope, _, _ = friction_step(spring, ph, s, e, e, 1.0 if dT >= 0.0 else -1.0, pf, s_new)
+                mu = slope * h / c
                 beta = mu / math.expm1(mu) if mu < 700.0 else 0.0
                 gamma = (1.0 - beta) / mu if mu > 1e-4 else 0.5 - mu / 6.0
                 cb, gdT = c * beta / h, gamma * dT

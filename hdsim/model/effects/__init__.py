@@ -18,6 +18,7 @@ from hdsim.errors import InputError, unknown_name
 from hdsim.model.effects.backlash import Backlash, DeadZoneBacklash, GradualDeadZone, NoBacklash
 from hdsim.model.effects.base import Effect, FitContext, FreeParameter
 from hdsim.model.effects.damping import Damping, NoDamping, ViscousDamping
+from hdsim.model.effects.distributed_slip import DistributedSlip
 from hdsim.model.effects.friction import (CoulombFriction, DahlFriction, DahlSlip, Friction, MaxwellSlip,
                                           NoFriction)
 from hdsim.model.effects.hardening import Hardening, NoHardening, TanhHardening, ThreeSegmentHardening
@@ -28,6 +29,7 @@ __all__ = ["Effect", "FitContext", "FreeParameter", "Parameters", "param",
            "Hardening", "NoHardening", "ThreeSegmentHardening", "TanhHardening",
            "Backlash", "NoBacklash", "DeadZoneBacklash",
            "Friction", "NoFriction", "DahlFriction", "CoulombFriction", "MaxwellSlip", "DahlSlip",
+           "DistributedSlip",
            "Damping", "NoDamping", "ViscousDamping",
            "KinematicError", "NoKinematicError", "FourierKinematicError",
            "FAMILIES", "NO_EFFECT", "FAMILY_BASES", "register", "unregister", "effect_class", "make_effect",
@@ -122,7 +124,7 @@ def make_effect(family: str, effect_id: str, **values) -> Effect:
 
 
 for _cls in (NoHardening, ThreeSegmentHardening, NoBacklash, GradualDeadZone, NoFriction, DahlSlip,
-             CoulombFriction, MaxwellSlip, NoDamping, NoKinematicError):
+             CoulombFriction, MaxwellSlip, DistributedSlip, NoDamping, NoKinematicError):
     register(_cls)
 for _cls in (TanhHardening, DeadZoneBacklash, DahlFriction, ViscousDamping, FourierKinematicError):
     register(_cls, default=True)

@@ -88,6 +88,11 @@ class Effect(Parameters):
     #: adds a family it tries these in place of this effect: an imperfect shape leaves a
     #: residual that another family would otherwise be added to absorb (a proxy)
     other_forms: ClassVar[tuple[str, ...]] = ()
+    #: ids of effects of the same family that a diagnosis also tries when the family enters
+    #: the model, the best passing form standing for the family: for forms so different in
+    #: kind that the family would lose its round to another family's proxy (friction in
+    #: series with the spring and beside it)
+    entry_forms: ClassVar[tuple[str, ...]] = ()
 
     @property
     def prefix(self) -> str:

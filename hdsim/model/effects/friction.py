@@ -213,8 +213,13 @@ class DahlFriction(_DahlLaw):
 
     id: ClassVar[str] = "dahl"
     #: Dahl's exponential approach and the Maxwell-slip elements' piecewise-linear one
-    #: bracket the loop shapes of the published friction laws (Bouc–Wen, LuGre, Preisach)
-    other_forms: ClassVar[tuple[str, ...]] = ("maxwell_slip",)
+    #: bracket the loop shapes of the friction laws that act beside the spring (Bouc–Wen,
+    #: LuGre, Maxwell-slip); slip in series with it (Preisach's relays) stiffens again
+    #: once it runs out, which neither draws (`hdsim.model.effects.distributed_slip`)
+    other_forms: ClassVar[tuple[str, ...]] = ("maxwell_slip", "distributed_slip")
+    #: a series slip's loop is soft away from the reversal and stiff beside it; fitted
+    #: with Dahl alone, a hardening takes the round as its proxy
+    entry_forms: ClassVar[tuple[str, ...]] = ("distributed_slip",)
     torque_max: float = param("Coulomb (saturation) torque", "N·m", positive=True)
     sigma: float = param("initial (sticking) stiffness", "N·m/rad", positive=True)
 

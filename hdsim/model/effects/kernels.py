@@ -3,7 +3,7 @@
 Optional: this module needs numba (``pip install "hdsim[fast]"``); the effects import it
 only when asked for their compiled form (`Effect.compiled`), and the evaluator falls back
 to its numpy form when numba is missing or a law has none (a law defined outside the
-package, a law in series with the spring). Each function is the scalar twin of the numpy
+package, the Dahl micro-slip slider). Each function is the scalar twin of the numpy
 law it names, for one parameter set (one row of a batch); the evaluator's tests check
 each pair against each other.
 
@@ -27,16 +27,20 @@ _ROW = types.float64[::1]
 
 #: spring law of the hardening family: (torque [N·m], tangent [N·m/rad]) at body twist e
 SPRING = types.UniTuple(_F8, 2)(_F8, _ROW)
-#: the friction states after the body twist moves monotonically from e0 to e (written to
-#: ``out``), and their (parallel torque [N·m], slope along the path [N·m/rad]) moving in
-#: direction d: one call per Newton iteration (each call through a function pointer costs)
-FRICTION_STEP = types.UniTuple(_F8, 2)(_ROW, _F8, _F8, _F8, _ROW, _ROW)
+_SPRING_FUNCTION = types.FunctionType(SPRING)
+#: the body after its twist moves monotonically from e0 to e in direction d, through the
+#: spring law (its function and row): the friction states written to ``out``, and (body
+#: torque [N·m], its slope along the path [N·m/rad], spring torque [N·m], spring tangent
+#: [N·m/rad]). One call per Newton iteration (each call through a function pointer costs);
+#: a law beside the spring adds its torque to the spring's, a law in series with it
+#: solves for the spring's share of the twist
+FRICTION_STEP = types.UniTuple(_F8, 4)(_SPRING_FUNCTION, _ROW, _ROW, _F8, _F8, _F8, _ROW, _ROW)
 #: viscous coefficient [N·m·s/rad] where the tangent stiffness is ratio·K₀
 DAMPING = _F8(_F8, _ROW)
 #: angle of the dead zone [rad] that carries the contact twist v = T/K₀
 GAP_TWIST = _F8(_F8, _ROW)
 
-FUNCTION_TYPES = {"spring": types.FunctionType(SPRING), "friction_step": types.FunctionType(FRICTION_STEP),
+FUNCTION_TYPES = {"spring": _SPRING_FUNCTION, "friction_step": types.FunctionType(FRICTION_STEP),
                   "damping": types.FunctionType(DAMPING), "gap_twist": types.FunctionType(GAP_TWIST)}
 
 
@@ -82,26 +86,29 @@ def tanh_spring(e, p):
 
 
 @njit(FRICTION_STEP, cache=True, error_model="numpy")
-def no_friction(s0, e0, e, d, p, out):
-    """No friction states, no torque."""
-    return 0.0, 0.0
+def no_friction(spring, ph, s0, e0, e, d, p, out):
+    """The spring alone."""
+    u, k = spring(e, ph)
+    return u, k, u, k
 
 
 @njit(FRICTION_STEP, cache=True, error_model="numpy")
-def dahl_step(s0, e0, e, d, p, out):
-    """Exact Dahl state over a monotone twist step, its torque (the state) and slope
-    ``σ max(1 − z d/F, 0)``; p = (σ/F or 0, F, σ)."""
+def dahl_step(spring, ph, s0, e0, e, d, p, out):
+    """Exact Dahl state over a monotone twist step, added to the spring's torque, and the
+    slope ``σ max(1 − z d/F, 0)`` added to its tangent; p = (σ/F or 0, F, σ)."""
     step = e - e0
     target = math.copysign(p[1], step)
     z = target - (target - s0[0]) * math.exp(-p[0] * abs(step))
     out[0] = z
-    return z, p[2] * max(1.0 - z / p[1] * d, 0.0)
+    u, k = spring(e, ph)
+    return u + z, k + p[2] * max(1.0 - z / p[1] * d, 0.0), u, k
 
 
 @njit(FRICTION_STEP, cache=True, error_model="numpy")
-def maxwell_slip_step(s0, e0, e, d, p, out):
-    """Elasto-plastic elements stopped at their reach, ``Σ k_i z_i`` and the stiffness of
-    the elements not sliding in direction d; p = (k_1…k_n, f_1…f_n, reach_1…reach_n)."""
+def maxwell_slip_step(spring, ph, s0, e0, e, d, p, out):
+    """Elasto-plastic elements stopped at their reach, ``Σ k_i z_i`` added to the spring's
+    torque and the stiffness of the elements not sliding in direction d to its tangent;
+    p = (k_1…k_n, f_1…f_n, reach_1…reach_n)."""
     n = s0.size
     torque = 0.0
     slope = 0.0
@@ -112,7 +119,66 @@ def maxwell_slip_step(s0, e0, e, d, p, out):
         torque += k * z
         if not d * z * k >= f * (1.0 - 1e-9):
             slope += k
-    return torque, slope
+    u, k = spring(e, ph)
+    return u + torque, k + slope, u, k
+
+
+@njit(types.UniTuple(_F8, 2)(_ROW, _F8, _F8, _F8, _ROW, _ROW), cache=True, error_model="numpy")
+def _relays_on_branch(s0, torque, d, nudge, p, out):
+    """`hdsim.physics.friction.relay_slips_on_branch` for one parameter set: the slips
+    written to ``out``, returns (total slip [rad], its slope in the torque [rad/(N·m)]).
+    A relay within ``nudge`` of its range behind its curve counts as on it (the slope of
+    a step of zero length, as in `DistributedSlip.path_tangent`)."""
+    n = s0.size
+    total = 0.0
+    slope = 0.0
+    for i in range(n):
+        c, w, a = p[i], p[n + i], p[2 * n + i]
+        x = min(max((torque - d * c) / w, -1.0), 1.0)
+        curve = a * 0.5 * x * (3.0 - x * x)
+        if d * (curve - s0[i]) > -nudge * a:
+            out[i] = curve
+            slope += a * 1.5 * (1.0 - x * x) / w
+        else:
+            out[i] = s0[i]
+        total += out[i]
+    return total, slope
+
+
+@njit(FRICTION_STEP, cache=True, error_model="numpy")
+def distributed_slip_step(spring, ph, s0, e0, e, d, p, out):
+    """Relays in series with the spring (`hdsim.model.effects.distributed_slip`): the
+    spring's twist x solving ``x + slip(u(x)) = e`` by Newton's method in the bracket
+    ``e ∓ Σ a_i``, the body torque u(x) and its slope ``k/(1 + k·dslip/dT)``;
+    p = (c_1…c_n, w_1…w_n, a_1…a_n)."""
+    n = s0.size
+    reach = 0.0
+    held = 0.0
+    for i in range(n):
+        reach += p[2 * n + i]
+        held += s0[i]
+    lo, hi = e - reach, e + reach
+    x = e - held
+    for _ in range(60):
+        u, k = spring(x, ph)
+        total, slope = _relays_on_branch(s0, u, d, 0.0, p, out)
+        h = x + total - e
+        if h == 0.0:  # most steps: no relay moves, the start is the root
+            break
+        if h < 0.0:
+            lo = max(lo, x)
+        else:
+            hi = min(hi, x)
+        xn = x - h / (1.0 + k * slope)
+        if xn < lo or xn > hi:  # the root may sit on the bracket's edge (a relay at its stop)
+            xn = 0.5 * (lo + hi)
+        done = abs(xn - x) <= 1e-15 + 1e-13 * abs(x)
+        x = xn
+        if done:
+            break
+    u, k = spring(x, ph)
+    _, slope = _relays_on_branch(s0, u, d, 1e-4 if e == e0 else 0.0, p, out)
+    return u, k / (1.0 + k * slope), u, k
 
 
 # --------------------------------------------------------------------------- damping
