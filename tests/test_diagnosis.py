@@ -10,7 +10,6 @@ short records (600–1000 rows); the battery with the rates of the done-when lis
 
 from __future__ import annotations
 
-import functools
 import json
 
 import numpy as np
@@ -186,17 +185,11 @@ FAMILIES = ("hardening", "backlash", "friction", "damping")
 SEEDS = (0, 1, 2, 3, 4)
 
 
-@functools.lru_cache(maxsize=None)
 def _battery():
     """validation/diagnosis_battery.py as a module (loaded once per session)."""
-    import importlib.util
-    from pathlib import Path
+    import validation_scripts
 
-    path = Path(__file__).resolve().parents[1] / "validation" / "diagnosis_battery.py"
-    spec = importlib.util.spec_from_file_location("diagnosis_battery", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return validation_scripts.load("diagnosis_battery")
 
 
 def _rates(group, seeds):

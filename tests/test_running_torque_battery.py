@@ -11,28 +11,18 @@ nothing added when nothing is hidden, in >= 90 % of runs, 6 seeds per group) is
 from __future__ import annotations
 
 import functools
-import importlib.util
 import os
-import sys
-from pathlib import Path
 
 import pytest
+
+import validation_scripts
 
 SEEDS = tuple(range(6))  # >= 5 seeds per group, as the issue asks
 
 
-@functools.lru_cache(maxsize=None)
 def _battery():
     """validation/running_torque_battery.py as a module (loaded once per session)."""
-    path = Path(__file__).resolve().parents[1] / "validation" / "running_torque_battery.py"
-    spec = importlib.util.spec_from_file_location("running_torque_battery", path)
-    module = importlib.util.module_from_spec(spec)
-    # registered and importable by name: the battery's worker processes unpickle its functions
-    sys.modules[spec.name] = module
-    if str(path.parent) not in sys.path:
-        sys.path.insert(0, str(path.parent))
-    spec.loader.exec_module(module)
-    return module
+    return validation_scripts.load("running_torque_battery")
 
 
 def _explain(row: dict) -> str:

@@ -9,19 +9,14 @@ damping/friction pair is left out of ``both|dec`` and kept in ``both``.
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import pytest
+
+import validation_scripts
 
 
 @pytest.fixture(scope="module")
 def zb():
-    path = Path(__file__).resolve().parents[1] / "validation" / "zoo_battery.py"
-    spec = importlib.util.spec_from_file_location("zoo_battery_under_test", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return validation_scripts.load("zoo_battery")
 
 
 def run(group, hidden, added, *, secondary=None, ambiguous=(), ranking=None, outcome="improved"):
