@@ -104,9 +104,9 @@ def _print(s) -> None:
     print("ranking (first round, lower score is better):")
     for c in s["ranking"]:
         if c["score"] is None:
-            print(f"  {c['family']:<16} {c['effect']:<10} {c['why']}")
+            print(f"  {c['family']:<16} {c['effect']:<16} {c['why']}")
             continue
-        print(f"  {c['family']:<16} {c['effect']:<10} score {c['score']:10.1f}  rms {c[key]:.3g} {unit}"
+        print(f"  {c['family']:<16} {c['effect']:<16} score {c['score']:10.1f}  rms {c[key]:.3g} {unit}"
               f"  {c['why']}")
     print(f"added: {', '.join(s['added']) or 'nothing'}")
     for r in s.get("reshaped", []):
