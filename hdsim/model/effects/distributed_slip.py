@@ -112,6 +112,8 @@ class DistributedSlip(Friction):
             u, k = spring(x)
             slips, slopes = fr.relay_slips_on_branch(s0, u, direction, c, w, a)
             h = x + np.sum(slips, axis=0) - end
+            if not np.any(h):  # most steps: no relay moves, the start is the root
+                return u, k / (1.0 + k * np.sum(slopes, axis=0)), slips, u, k
             lo = np.where(h < 0.0, np.maximum(lo, x), lo)
             hi = np.where(h > 0.0, np.minimum(hi, x), hi)
             xn = x - h / (1.0 + k * np.sum(slopes, axis=0))
