@@ -30,8 +30,8 @@ from hdsim.model.effects.friction import _LAW, Friction
 from hdsim.model.parameters import param
 from hdsim.physics import friction as fr
 
-#: relays of the quadrature; six keep a loop of spread >= 0.2 smooth to a few per cent
-#: of its width and cost six states
+#: relays of the quadrature: six draw a continuous log-normal Preisach loop to within 3–6 %
+#: of its width for spreads 0.3–0.5 (docs/physics.md, "distributed micro-slip"), at six states
 N_RELAYS = 6
 #: bounds of a fit (`DistributedSlip.free_parameters`): the median switching torque over
 #: the record's peak torque at least, the spread at most
