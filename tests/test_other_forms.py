@@ -109,6 +109,7 @@ def test_a_gap_that_closes_gradually_is_not_taken_for_damping(tmp_path):
     assert d.added == ["backlash"]
     assert d.final.fit.rmse_rad < 0.5 * d.baseline.fit.rmse_rad
 
+
 @pytest.mark.slow
 def test_a_hard_gap_in_a_ke_run_changes_form_instead_of_taking_a_hardening_proxy(tmp_path):
     """A kinematic-error run under a varying load through a hard gap with contact

@@ -268,16 +268,14 @@ def verdict(rows: list[dict]) -> dict:
     low = sorted(g for g, x in singles.items() if x["first_decided"] is None or x["first_decided"] < TARGET_FIRST)
     pooled = rates([r for g in singles for r in per_group[g]])
     all_r = rates(rows)
-    twos = [r for r in rows if kind_of(r["group"]) == "two"]
-    nothing = [r for r in rows if kind_of(r["group"]) == "nothing"]
+    two_r = rates([r for r in rows if kind_of(r["group"]) == "two"])
+    none_r = rates([r for r in rows if kind_of(r["group"]) == "nothing"])
     out = {
         "first_pick": {"value": pooled["first_decided"] if singles else None,
                        "raw": pooled["first"] if singles else None,
                        "target": TARGET_FIRST, "below": low, "met": bool(singles) and not low},
-        "both_added": {"value": rates(twos)["both_decided"] if twos else None,
-                       "raw": rates(twos)["both"] if twos else None, "target": TARGET_BOTH},
-        "nothing_added": {"value": rates(nothing)["nothing_added"] if nothing else None,
-                          "strict": rates(nothing)["nothing_added_strict"] if nothing else None,
+        "both_added": {"value": two_r.get("both_decided"), "raw": two_r.get("both"), "target": TARGET_BOTH},
+        "nothing_added": {"value": none_r.get("nothing_added"), "strict": none_r.get("nothing_added_strict"),
                           "target": TARGET_NOTHING},
         "spurious": {"value": all_r["spurious"], "strict": all_r["spurious_strict"], "target": TARGET_SPURIOUS},
         "seeds": {"too_few": sorted(g for g, sel in per_group.items() if len({r['seed'] for r in sel}) < MIN_SEEDS),

@@ -25,8 +25,8 @@ from typing import ClassVar
 
 import numpy as np
 
-from hdsim.model.effects.base import FitContext, FreeParameter, parameter_rows
-from hdsim.model.effects.friction import _LAW, Friction
+from hdsim.model.effects.base import FitContext, FreeParameter
+from hdsim.model.effects.friction import _LAW, Friction, element_columns, element_rows
 from hdsim.model.parameters import param
 from hdsim.physics import friction as fr
 
@@ -83,10 +83,7 @@ class DistributedSlip(Friction):
 
     def _relays(self, states):
         """The columns shaped to broadcast against ``states`` (relay axis first)."""
-        if np.ndim(states) == 2:
-            return self._columns
-        shape = (N_RELAYS,) + (1,) * (np.ndim(states) - 2) + (-1,)
-        return tuple(c.reshape(shape) for c in self._columns)
+        return element_columns(self._columns, states)
 
     # -------------------------------------------------------------- the law
     def series_slip(self, states):
@@ -108,24 +105,28 @@ class DistributedSlip(Friction):
         reach = np.sum(a, axis=0)
         lo, hi = end - reach, end + reach
         x = end - np.sum(s0, axis=0)
-        for _ in range(60):
+
+        def at(x):
             u, k = spring(x)
             slips, slopes = fr.relay_slips_on_branch(s0, u, direction, c, w, a)
+            return u, k, slips, np.sum(slopes, axis=0)
+
+        u, k, slips, slope = at(x)
+        for _ in range(60):
             h = x + np.sum(slips, axis=0) - end
             if not np.any(h):  # most steps: no relay moves, the start is the root
-                return u, k / (1.0 + k * np.sum(slopes, axis=0)), slips, u, k
+                break
             lo = np.where(h < 0.0, np.maximum(lo, x), lo)
             hi = np.where(h > 0.0, np.minimum(hi, x), hi)
-            xn = x - h / (1.0 + k * np.sum(slopes, axis=0))
+            xn = x - h / (1.0 + k * slope)
             # the root may sit on the bracket's edge (every relay at its stop)
             xn = np.where((xn < lo) | (xn > hi), 0.5 * (lo + hi), xn)
             done = np.all(np.abs(xn - x) <= 1e-15 + 1e-13 * np.abs(x))
             x = xn
+            u, k, slips, slope = at(x)
             if done:
                 break
-        u, k = spring(x)
-        slips, slopes = fr.relay_slips_on_branch(s0, u, direction, c, w, a)
-        return u, k / (1.0 + k * np.sum(slopes, axis=0)), slips, u, k
+        return u, k / (1.0 + k * slope), slips, u, k
 
     def advance(self, states, start, end, spring):
         return self.quasistatic(states, start, end, spring)[2]
@@ -143,8 +144,7 @@ class DistributedSlip(Friction):
         if not self.keeps_law_of(DistributedSlip, _LAW + ("_columns",)):
             return None
         from hdsim.model.effects import kernels
-        columns = [row for column in self._columns for row in np.broadcast_to(column, (N_RELAYS, size))]
-        return (kernels.distributed_slip_step,), parameter_rows(size, *columns)
+        return (kernels.distributed_slip_step,), element_rows(self._columns, size)
 
     # -------------------------------------------------------------- fit protocol
     def free_parameters(self, context: FitContext):

@@ -39,6 +39,22 @@ def _states(states) -> np.ndarray:
     return np.asarray(states, dtype=float)
 
 
+def element_columns(columns: tuple, states) -> tuple:
+    """A law's per-element parameter columns, each (n, M), shaped to broadcast against
+    ``states`` (element axis first, the sample axis last)."""
+    if np.ndim(states) == 2:  # (n, M): the columns as they are
+        return columns
+    shape = (len(columns[0]),) + (1,) * (np.ndim(states) - 2) + (-1,)
+    return tuple(c.reshape(shape) for c in columns)
+
+
+def element_rows(columns: tuple, size: int) -> np.ndarray:
+    """A law's per-element parameter columns, each (n, M), as a compiled twin's parameter
+    rows: every column's elements in turn (`parameter_rows`)."""
+    rows = (row for column in columns for row in np.broadcast_to(column, (len(column), size)))
+    return parameter_rows(size, *rows)
+
+
 class Friction(Effect):
     """Base of the friction family (and its "no effect"): hysteresis in the body.
 
@@ -313,12 +329,8 @@ class MaxwellSlip(Friction):
             return k, f, f / k  # the last: each element's reach, f_i/k_i [rad]
 
     def _elements(self, states):
-        """Element stiffnesses, slip torques and reaches shaped to broadcast against
-        ``states`` (element axis first, the sample axis last)."""
-        if np.ndim(states) == 2:  # (n, M): the columns as they are
-            return self._columns
-        shape = (self.n_elements,) + (1,) * (np.ndim(states) - 2) + (-1,)
-        return tuple(c.reshape(shape) for c in self._columns)
+        """Element stiffnesses, slip torques and reaches shaped to broadcast against ``states``."""
+        return element_columns(self._columns, states)
 
     def parallel_torque(self, states):
         states = _states(states)
@@ -347,8 +359,7 @@ class MaxwellSlip(Friction):
         if not self.keeps_law_of(MaxwellSlip, _LAW + ("_columns", "n_elements")):
             return None
         from hdsim.model.effects import kernels
-        columns = [row for column in self._columns for row in np.broadcast_to(column, (self.n_elements, size))]
-        return (kernels.maxwell_slip_step,), parameter_rows(size, *columns)
+        return (kernels.maxwell_slip_step,), element_rows(self._columns, size)
 
     def free_parameters(self, context: FitContext):
         t = context.max_torque
