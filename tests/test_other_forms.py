@@ -149,3 +149,31 @@ def test_a_hard_gap_is_not_taken_for_slip_at_zero_torque(tmp_path):
     the backlash is added (zoo seed 37)."""
     d = _zoo_diagnosis(tmp_path, {"backlash": "hard_gap"}, {}, "long_2kHz", 37)
     assert d.added == ["backlash"]
+
+
+# --------------------------------------------------------------------------- hardening near zero torque (slow)
+
+
+@pytest.mark.slow
+def test_a_smooth_gap_is_not_taken_for_a_soft_first_segment(tmp_path):
+    """A cubic hardening and a smooth gap on one loading rate. After the smooth hardening,
+    the guard tried the catalog's three segments: with T1 free down to zero it drew the gap
+    as a first segment ending at 0.5 % of the peak torque, 29x softer than the next, and
+    took the backlash's place (−4325 against the dead zone's −3030). T1 is now held above
+    5 % of the peak torque, and the backlash is added (zoo seed 48)."""
+    d = _zoo_diagnosis(tmp_path, {"hardening": "cubic", "backlash": "smooth_gap"}, {}, "one_rate", 48)
+    assert sorted(d.added) == ["backlash", "hardening"]
+    assert not d.reshaped
+
+
+@pytest.mark.slow
+def test_an_asymmetric_gap_is_not_taken_for_a_smooth_hardening(tmp_path):
+    """An exponential hardening and an asymmetric gap. With its transition torque free down
+    to zero, the smooth hardening drew the gap (T_s at 1.3 % of the peak torque, K∞/K₀ far
+    above any catalog's) and was added first; no backlash could then pass. T_s is now held
+    above 5 % of the peak torque: the backlash ranks first and both families are added
+    (zoo seed 39)."""
+    d = _zoo_diagnosis(tmp_path, {"hardening": "exponential", "backlash": "asymmetric_gap"}, {},
+                       "two_rates_equal", 39)
+    assert d.added == ["backlash", "hardening"]
+    assert d.final.fit.rmse_rad < 0.5 * d.baseline.fit.rmse_rad

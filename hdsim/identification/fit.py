@@ -122,8 +122,8 @@ def build_model(unit, effects: dict[str, str], meas: Measurement | None = None) 
 @dataclass
 class FitResult(FittedRows):
     """A fitted model and what the fit says about it (``params``: dotted model overrides;
-    ``internal``: the fitted coordinates K0, K_ratio, …; ``uncertainty`` keyed like
-    ``internal``, plus ``offset_rad``).
+    ``internal``: the fitted coordinates K0, the hardening's curvature and T_s, …;
+    ``uncertainty`` keyed like ``internal``, plus ``offset_rad``).
 
     Attributes
     ----------

@@ -20,6 +20,14 @@ from hdsim.physics import stiffness as st
 #: the methods a compiled twin stands for (`Effect.keeps_law_of`)
 _LAW = ("torque", "tangent", "spring_law")
 
+#: a fitted first breakpoint stays above this fraction of the record's peak torque. The
+#: catalog's T1 is 16-20 % of the rated torque for every size (K2/K1 = 1.3-1.6), so a
+#: first segment that ends within a few per cent of zero torque, many times softer than
+#: the next, is not a hardening: it is a dead zone whose contact stiffens (the backlash
+#: family's shape), and a fit of a smooth gap lets it be one (T1 at 0.5 % of the peak with
+#: the next segment 29x stiffer)
+MIN_FIRST_BREAKPOINT = 0.05
+
 
 class Hardening(Effect):
     """Base of the hardening family; subclasses give ``torque`` and ``tangent``."""
@@ -110,7 +118,8 @@ class ThreeSegmentHardening(Hardening):
 
     def free_parameters(self, context: FitContext):
         t = context.max_torque
-        return (FreeParameter("T1", 0.0, np.inf, 0.15 * t), FreeParameter("T2", 0.0, np.inf, 0.5 * t),
+        return (FreeParameter("T1", MIN_FIRST_BREAKPOINT * t, np.inf, 0.15 * t),
+                FreeParameter("T2", 0.0, np.inf, 0.5 * t),
                 FreeParameter("e2", 1.0, 100.0, 1.5), FreeParameter("e3", 1.0, 100.0, 2.5))
 
     @classmethod
@@ -128,17 +137,19 @@ class TanhHardening(Hardening):
 
     The transition is centred on the twist reached at ``T_s`` under K₀.
 
-    A fit frees it through two coordinates the data fix directly: the stiffness ratio
-    ``K∞/K₀`` (which the base stiffness split turns into ``e_inf``) and the curvature
-    ``(K∞/K₀ − 1)/T_s²`` [1/(N·m)²], which sets the tangent stiffness
-    ``K₀ (1 + curvature·T²)`` at small load.
+    A fit frees it through the curvature ``(K∞/K₀ − 1)/T_s²`` [1/(N·m)²], which the data
+    fix directly (it sets the tangent stiffness ``K₀ (1 + curvature·T²)`` at small load),
+    and the transition torque ``T_s``, bounded below by `MIN_FIRST_BREAKPOINT` of the
+    record's peak torque for the reason the three-segment law's T1 is; the stiffness ratio
+    ``K∞/K₀ = 1 + curvature·T_s²`` (at most 40) becomes ``e_inf`` through the base
+    stiffness split.
     """
 
     id: ClassVar[str] = "tanh"
     other_forms: ClassVar[tuple[str, ...]] = ("three_segment",)
     e_inf: float = param("engagement ratio at high load", "-", 1.0, 100.0)
     T_s: float = param("transition torque", "N·m", positive=True)
-    #: range of K∞/K₀ a fit searches
+    #: range of K∞/K₀ a fit reaches (1 + curvature·T_s² is clipped to it)
     ratio_bounds: ClassVar[tuple[float, float]] = (1.0, 40.0)
 
     def _k(self, c_struct, c_mesh):
@@ -164,17 +175,20 @@ class TanhHardening(Hardening):
         return (kernels.tanh_spring,), parameter_rows(size, *self._k(c_struct, c_mesh))
 
     def free_parameters(self, context: FitContext):
-        return (FreeParameter("curvature", 0.0, np.inf, 3.0 / (0.6 * context.max_torque) ** 2),
-                FreeParameter("K_ratio", *self.ratio_bounds, 4.0))
+        # the start is the ratio 4 with the transition at 0.6 of the peak torque
+        t = context.max_torque
+        return (FreeParameter("curvature", 0.0, np.inf, 3.0 / (0.6 * t) ** 2),
+                FreeParameter("T_s", MIN_FIRST_BREAKPOINT * t, np.inf, 0.6 * t))
 
     def stiffness_ratio(self, values):
-        return values["K_ratio"]
+        ratio = np.clip(1.0 + np.asarray(values["curvature"], dtype=float)
+                        * np.asarray(values["T_s"], dtype=float) ** 2, *self.ratio_bounds)
+        return float(ratio) if ratio.ndim == 0 else ratio  # a float keys the stiffness split's cache
 
     def fit_updates(self, values, engagement=None):
-        excess = np.maximum(np.asarray(values["K_ratio"], dtype=float) - 1.0, 1e-9)
-        curvature = np.maximum(np.asarray(values["curvature"], dtype=float), 1e-300)
-        # a ratio pinned at 1 or a curvature at 0 mean "no hardening": T_s far out, finite
-        T_s = np.minimum(np.sqrt(excess / curvature), 1e12)
+        # a curvature at 0 means "no hardening" whatever T_s: far out, finite
+        T_s = np.where(np.asarray(values["curvature"], dtype=float) > 0.0,
+                       np.minimum(np.asarray(values["T_s"], dtype=float), 1e12), 1e12)
         return {"hardening.e_inf": engagement, "hardening.T_s": T_s}
 
     @classmethod
