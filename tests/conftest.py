@@ -10,15 +10,33 @@ Session fixtures (each built on first use, then reused by every test that asks):
   (``tests/truth.py``, which shares no code with hdsim) as ``(columns, truth)``.
 
 Tests must not modify what these fixtures return (runs hold numpy arrays: copy before
-changing one).
+changing one). Under pytest-xdist the three runs are made once for all workers: the first
+worker to ask makes the run, the others read its pickle (``_once_per_session``).
 
 ``cli`` runs the console verbs in-process (``hdsim.cli.main``) and returns
 ``(exit code, stdout, stderr)``; only ``tests/test_console.py`` runs the verbs as subprocesses.
 """
 
+import fcntl
 import os
+import pickle
 
-import matplotlib
+# Under pytest-xdist each worker gets its share of the cores for BLAS, OpenMP (numba's
+# prange) and numba threads. With two workers on two cores, each worker's two OpenBLAS
+# threads spin against the other worker's: a 4500 × 20 least-squares solve took 116 ms
+# instead of 1.5 ms, and the running-torque diagnosis (~900 of them) half a minute.
+# The variables reach numba (imported later) and the subprocesses the tests start;
+# numpy's OpenBLAS is already loaded by pytest's plugins, so it is limited in place.
+_WORKERS = os.environ.get("PYTEST_XDIST_WORKER_COUNT")
+if _WORKERS:
+    _THREADS = max(1, (os.cpu_count() or 1) // int(_WORKERS))
+    for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
+        os.environ.setdefault(_name, str(_THREADS))
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(limits=_THREADS)
+
+import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")
 os.environ.setdefault("MPLBACKEND", "Agg")
@@ -26,31 +44,50 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 import pytest  # noqa: E402
 
 
-@pytest.fixture(scope="session")
-def ke_run():
+def _once_per_session(tmp_path_factory, name, make):
+    """``make()`` once per test session, across pytest-xdist workers too.
+
+    Each worker has its own session fixtures, so a run that tests on both workers ask for
+    was made twice (the contract run: ~10 s each). Here the first worker to ask makes it
+    and pickles it into the session's temporary folder, which all workers share (the
+    recipe of the pytest-xdist documentation, locked with ``fcntl``); the others wait for
+    it and read it. Without xdist it is simply ``make()``.
+    """
+    if not os.environ.get("PYTEST_XDIST_WORKER"):
+        return make()
+    shared = tmp_path_factory.getbasetemp().parent
+    path = shared / f"{name}.pickle"
+    with open(shared / f"{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        if path.is_file():
+            return pickle.loads(path.read_bytes())
+        value = make()
+        path.with_suffix(".tmp").write_bytes(pickle.dumps(value))
+        path.with_suffix(".tmp").replace(path)
+        return value
+
+
+def _builtin_run(unit_name, scenario_name):
     from hdsim.model.catalog import load_unit
     from hdsim.scenarios.run import run_scenario
     from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario
 
-    return run_scenario(load_unit("CSG-25-100"), load_scenario(builtin_scenario_path("kinematic_error")))
+    return run_scenario(load_unit(unit_name), load_scenario(builtin_scenario_path(scenario_name)))
 
 
 @pytest.fixture(scope="session")
-def default_lost_motion_run():
-    from hdsim.model.catalog import load_unit
-    from hdsim.scenarios.run import run_scenario
-    from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario
-
-    return run_scenario(load_unit(), load_scenario(builtin_scenario_path("lost_motion")))
+def ke_run(tmp_path_factory):
+    return _once_per_session(tmp_path_factory, "ke_run", lambda: _builtin_run("CSG-25-100", "kinematic_error"))
 
 
 @pytest.fixture(scope="session")
-def default_stiffness_run():
-    from hdsim.model.catalog import load_unit
-    from hdsim.scenarios.run import run_scenario
-    from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario
+def default_lost_motion_run(tmp_path_factory):
+    return _once_per_session(tmp_path_factory, "default_lost_motion_run", lambda: _builtin_run(None, "lost_motion"))
 
-    return run_scenario(load_unit(), load_scenario(builtin_scenario_path("stiffness")))
+
+@pytest.fixture(scope="session")
+def default_stiffness_run(tmp_path_factory):
+    return _once_per_session(tmp_path_factory, "default_stiffness_run", lambda: _builtin_run(None, "stiffness"))
 
 
 @pytest.fixture(scope="session")

@@ -108,6 +108,47 @@ def test_units_lists_the_catalog(cli):
     assert code == 0 and "CSG-25-100" in table and "(default)" in table
 
 
+def test_demo_writes_both_default_unit_tests(tmp_path, cli, monkeypatch, png_image, default_lost_motion_run,
+                                            default_stiffness_run):
+    """``hdsim demo`` in-process: its summary, figures and results. The demo runs the two
+    shipped scenarios on the default unit, which are the session's shared runs; the verb
+    gets those (after checking it asked for them) instead of making them a second time.
+    The console script with its own runs: ``test_console.py::test_demo_console_script``
+    (``-m slow``)."""
+    from hdsim.cli import demo
+
+    shared = {"lost_motion": default_lost_motion_run, "stiffness": default_stiffness_run}
+    asked = []
+
+    def shared_run(model, scenario):
+        assert model.name == "CSG-25-100" and model.params() == load_unit().params()
+        assert {k: e.id for k, e in model.effects().items()} == {k: e.id for k, e in load_unit().effects().items()}
+        assert scenario.source == str(builtin_scenario_path(scenario.name))
+        asked.append(scenario.name)
+        return shared[scenario.name]
+
+    monkeypatch.setattr(demo, "run_scenario", shared_run)
+    code, stdout, err = cli("demo", "--json", cwd=tmp_path)
+    assert code == 0, err
+    assert sorted(asked) == ["lost_motion", "stiffness"]
+    data = json.loads(stdout)
+    unit, cat = load_unit(), catalog_entry("CSG-25-100")
+    elastic = rad_to_arcmin(0.08 * cat["rated_torque"] / cat["K1"])
+    assert data["elastic_lost_motion_arcmin"] == pytest.approx(elastic, rel=1e-12)
+    # closed forms (test_stiffness_catalog): elastic span + backlash; loss = 2·s_max
+    assert data["metrics"]["lost_motion_arcmin"] == pytest.approx(
+        elastic + rad_to_arcmin(float(unit.backlash.gap)), rel=0.01)
+    assert data["metrics"]["hysteresis_loss_arcmin"] == pytest.approx(
+        rad_to_arcmin(2 * float(unit.friction.slip_max)), rel=0.03)
+    folder = tmp_path / "hdsim-demo"
+    assert {"lost_motion.h5", "stiffness.h5", "lost_motion_loop.png", "stiffness_loop.png"} <= {
+        f.name for f in folder.iterdir()}
+    for name in ("lost_motion_loop.png", "stiffness_loop.png"):
+        png_image(folder / name)
+    stored = read_run(folder / "stiffness.h5")
+    assert stored.metrics["K1_Nm_per_rad"][0] == pytest.approx(data["metrics"]["K1_Nm_per_rad"])
+
+
 def test_no_verb_prints_help_and_exits_2(cli):
     code, stdout, err = cli()
     assert code == 2 and "usage" in err and stdout == ""

@@ -1,7 +1,8 @@
 """One subprocess smoke test per verb: the installed ``hdsim`` console script and
 ``python -m hdsim`` really start, dispatch, print one JSON object and exit with the
 contract's status. Everything else about the verbs is tested in-process
-(``hdsim.cli.main``) in the other files, which is ~1 s cheaper per call.
+(``hdsim.cli.main``) in the other files, which is ~1 s cheaper per call. The demo's, which
+makes its two default-unit runs itself, is in the ``-m slow`` set.
 """
 
 import json
@@ -48,6 +49,9 @@ def test_simulate_module(tmp_path):
     assert Path(payload["result"]).is_file()
 
 
+@pytest.mark.slow(reason="10 s: the demo's two default-unit runs in a fresh process; the default run "
+                  "checks the verb in-process on the shared runs (test_cli_simulate.py::"
+                  "test_demo_writes_both_default_unit_tests) and the console script with the other verbs")
 def test_demo_console_script(tmp_path, png_image):
     """The README's main job, for real: both default-unit tests, figures and results."""
     p = console("demo", "--json", cwd=tmp_path)

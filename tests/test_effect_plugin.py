@@ -121,7 +121,9 @@ def _measurement(seed=0, n=900):
 
 
 def test_fit_recovers_the_outside_law(registered):
-    result = fit(_measurement(), ["bouc_wen_test"])
+    # 450 rows (75 a second, as the diagnosis below): the law has no compiled twin, so each
+    # evaluation steps in numpy; recovery was measured within 0.5 % (seeds 0-2, 300-900 rows)
+    result = fit(_measurement(n=450), ["bouc_wen_test"])
     assert result.effects == {"friction": "bouc_wen_test"}
     assert result.params["friction.saturation"] == pytest.approx(TRUTH["saturation"], rel=0.05)
     assert result.params["friction.stiffness"] == pytest.approx(TRUTH["stiffness"], rel=0.2)

@@ -228,6 +228,10 @@ def test_friction_loop_is_2F_over_K_wide_and_lowers_the_span(name):
         assert 2 * (A - F) / K < arcmin_to_rad(lm) < 2 * A / K
 
 
+@pytest.mark.slow(reason="4 s; the default unit's friction is this law (dahl_slip), and the default run "
+                  "checks both claims on the shared default-unit runs: test_stiffness_catalog.py::"
+                  "test_hysteresis_loss_is_twice_the_micro_slip_range (2·s_max beyond the slip torque, 3 %) "
+                  "and ::test_default_lost_motion_is_elastic_span_plus_backlash (elastic below it, 1 %)")
 def test_micro_slip_adds_twice_its_range_beyond_its_slip_torque():
     """Dahl slider with end stops in series with the spring: a cycle beyond its slip torque
     holds ±s_max at zero torque (loop 2·s_max wide), a cycle below it stays elastic.

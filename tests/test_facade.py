@@ -54,15 +54,17 @@ def test_import_hdsim_leaves_solvers_hdf5_and_plotting_unloaded(tmp_path):
 
 def test_run_scenario_by_name_from_any_directory(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)  # no scenarios/ folder here: the name is the built-in file
-    run = hdsim.run_scenario(hdsim.load_unit(), "lost_motion", options=COARSE)
-    reference = run_scenario(load_unit(), load_scenario(builtin_scenario_path("lost_motion")),
-                             options=COARSE)
+    # without friction and backlash: the name is tested, not the physics (0.1 s a run)
+    run = hdsim.run_scenario(hdsim.load_unit().without("friction", "backlash"), "lost_motion", options=COARSE)
+    reference = run_scenario(load_unit().without("friction", "backlash"),
+                             load_scenario(builtin_scenario_path("lost_motion")), options=COARSE)
     assert run.metric("lost_motion_arcmin") == reference.metric("lost_motion_arcmin")
     assert run.scenario.name == "lost_motion"
 
 
 def test_sobol_on_a_modified_drive_and_a_scenario_object():
-    drive = hdsim.load_unit("CSG-25-100").with_updates({"backlash.gap": 2e-5})
+    # without the micro-slip: the study's 32 rows take a second (the physics is not the point)
+    drive = hdsim.load_unit("CSG-25-100").without("friction").with_updates({"backlash.gap": 2e-5})
     scenario = hdsim.load_scenario("lost_motion").with_updates({"load.cycles": 1})
     result = hdsim.sobol(drive, ["h_pz", "backlash.gap"], "lost_motion_arcmin",
                          scenario=scenario, range=0.1, **TINY)
@@ -78,7 +80,8 @@ def test_sobol_on_a_modified_drive_and_a_scenario_object():
 
 
 def test_study_callable_pickles_with_its_drive_object():
-    drive = load_unit().with_updates({"backlash.gap": 2e-5})
+    # a modified drive without friction and backlash: one evaluation takes 0.1 s, not 2
+    drive = load_unit().without("friction", "backlash").with_updates({"flexspline.R_v": 2.0e-3})
     func = model_function(drive, ["h_pz"], "lost_motion_arcmin")
     clone = pickle.loads(pickle.dumps(func))  # what a process pool or Dask sends
     assert drive_fingerprint(clone.drive) == drive_fingerprint(drive)  # the very same drive
@@ -87,38 +90,49 @@ def test_study_callable_pickles_with_its_drive_object():
 
 def test_resume_with_another_drive_is_refused(tmp_path):
     study = tmp_path / "s.h5"
-    hdsim.sobol(load_unit(), "h_pz,h_c", "lost_motion_arcmin", out=study, **TINY)
-    other = load_unit().with_updates({"backlash.gap": 2e-5})
+    # without friction and backlash the 32 rows take a second, not five
+    drive = load_unit().without("friction", "backlash")
+    hdsim.sobol(drive, "h_pz,h_c", "lost_motion_arcmin", out=study, **TINY)
+    other = drive.with_updates({"flexspline.R_v": 2.0e-3})  # a parameter the study does not vary
     with pytest.raises(InputError):
         hdsim.sobol(other, "h_pz,h_c", "lost_motion_arcmin", out=study, resume=True, **TINY)
-    again = hdsim.sobol(load_unit(), "h_pz,h_c", "lost_motion_arcmin", out=study, resume=True,
-                        **TINY)
+    again = hdsim.sobol(load_unit().without("friction", "backlash"), "h_pz,h_c", "lost_motion_arcmin",
+                        out=study, resume=True, **TINY)
     assert again.evaluated_now == 0
 
 
 @pytest.fixture(scope="module")
 def fitted_file(tmp_path_factory):
-    """A fitted-model file as ``hdsim fit --out`` writes it (fitted to a simulated loop)."""
-    truth = load_unit().with_updates({"backlash.gap": 3e-5})
-    run = run_scenario(truth, "lost_motion", samples_per_segment=40)
-    s = run.result.signals
-    meas = make_measurement("stiffness", run.result.t, s["torque_Nm"][0], s["twist_rad"][0],
-                            rated_torque=float(truth.drive.rated_torque))
+    """A fitted-model file as ``hdsim fit --out`` writes it, fitted to the ±4 % T_N loop of a
+    drive with a dead zone and without friction, evaluated quasi-statically (the evaluator
+    the fit uses; the dynamic run of the lost-motion test took seconds)."""
+    from hdsim.simulation.quasistatic import locked_twist
+
+    truth = load_unit().without("friction").with_updates({"backlash.gap": 3e-5})
+    T_N = float(truth.drive.rated_torque)
+    t = np.linspace(0.0, 8.0, 321)  # two cycles, 40 samples a ramp
+    torque = 0.04 * T_N * np.sin(2.0 * np.pi * t / 4.0)
+    meas = make_measurement("stiffness", t, torque, locked_twist(truth, t, torque)[0], rated_torque=T_N)
     fitted = hdsim.fit(meas, "hardening=three_segment,backlash")
     return fitted.save(tmp_path_factory.mktemp("fit") / "fitted.toml")
 
 
-def test_sobol_cli_on_a_fitted_model_file(fitted_file, capsys):
-    argv = ["sobol", "--unit", str(fitted_file), "--scenario", "lost_motion",
+def test_sobol_cli_on_a_fitted_model_file(fitted_file, tmp_path, capsys):
+    import tomli_w
+
+    # a scenario file of one load cycle: the 32 runs of the fitted dead zone take a third as long
+    scenario_file = tmp_path / "lost_motion_once.toml"
+    scenario_file.write_text(tomli_w.dumps(load_scenario("lost_motion").with_updates({"load.cycles": 1}).data))
+    argv = ["sobol", "--unit", str(fitted_file), "--scenario", str(scenario_file),
             "--params", "h_pz,backlash.gap", "--range", "10%", "--output", "lost_motion_arcmin",
             "--n", "8", "--replicates", "2", "--workers", "1", "--json"]
     assert main(argv) == 0
     out = json.loads(capsys.readouterr().out)
     assert CONTRACT_KEYS <= set(out) and out["evaluations"] == 8 * 4
     assert out["params"] == ["h_pz", "backlash.gap"]
-    fitted = load_fitted(fitted_file)
-    assert out["model"]["fingerprint"] == drive_fingerprint(fitted, load_scenario("lost_motion"))
-    assert out["model"]["fingerprint"] != drive_fingerprint(load_unit(), load_scenario("lost_motion"))
+    fitted, scenario = load_fitted(fitted_file), load_scenario(scenario_file)
+    assert out["model"]["fingerprint"] == drive_fingerprint(fitted, scenario)
+    assert out["model"]["fingerprint"] != drive_fingerprint(load_unit(), scenario)
 
 
 @pytest.mark.parametrize("option, value, fragment", [

@@ -76,14 +76,5 @@ def test_bad_input_exits_2_with_one_line(argv, fragment, capsys):
     assert len(lines) == 1 and fragment in lines[0], captured.err
 
 
-def test_unit_study_through_simulator(capsys):
-    argv = ["sobol", "--unit", "CSG-25-100", "--params", "h_pz,h_c", "--range", "10%",
-            "--output", "lost_motion_arcmin", "--n", "16", "--replicates", "2",
-            "--workers", "1", "--json"]
-    out = _json(capsys, argv)
-    assert out["output"] == "lost_motion_arcmin" and out["evaluations"] == 16 * 4
-    assert out["params"] == ["h_pz", "h_c"] and out["checks"]["items"]
-    model = dict(out["model"])
-    fingerprint = model.pop("fingerprint")  # of the drive's parameters and the scenario
-    assert isinstance(fingerprint, str) and len(fingerprint) == 16
-    assert model == {"unit": "CSG-25-100", "output": "lost_motion_arcmin", "scenario": None}
+# A unit's study through the simulator: tests/test_batch.py::test_sobol_cli_on_the_simulator
+# (one study of the lost-motion test checks the contract JSON, the checks and the model).

@@ -56,6 +56,37 @@ class SlowG:
         return self.g(X)
 
 
+def test_study_survives_a_lost_dask_worker():
+    """A worker lost mid-study (closed under its running chunk, in this process): the
+    scheduler recomputes what it held or ran elsewhere and the indices equal those of a
+    local study. The same with a worker process killed by SIGKILL is the slow test below."""
+    import threading
+    import time
+
+    g = GFunction()
+    local = run_study(g, g.problem(), 128, seed=4, workers=1, progress=False).analysis
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        holder = {}
+
+        def study():
+            holder["result"] = run_study(SlowG(), g.problem(), 128, seed=4, chunksize=16, progress=False,
+                                         executor=client.get_executor(pure=False))
+
+        thread = threading.Thread(target=study)
+        thread.start()
+        time.sleep(0.7)  # a third of the way in
+        assert thread.is_alive(), "study ended before a worker could be lost"
+        cluster.sync(cluster.workers[0].close)
+        thread.join(timeout=120)
+        assert not thread.is_alive()
+    remote = holder["result"].analysis
+    for key in KEYS:
+        np.testing.assert_array_equal(local[key], remote[key])
+
+
+@pytest.mark.slow(reason="10 s of CPU in four worker and nanny processes; "
+                  "test_study_survives_a_lost_dask_worker loses a worker in-process in the default run")
 def test_study_survives_a_killed_dask_worker():
     """A worker process killed mid-study (SIGKILL): its chunks run again elsewhere and the
     indices equal those of a local study."""

@@ -101,17 +101,37 @@ def test_sigkill_then_resume_matches_uninterrupted(tmp_path):
     assert resumed["evaluated_now"] == len(after)
 
 
-def test_main_process_killed_workers_die_and_study_resumes_at_once(tmp_path):
+def _run_here(tmp_path, monkeypatch, capsys, out, log, extra=()):
+    """`_run` in this process, one worker and no sleep: the reference study and the resume
+    (the indices do not depend on the workers; a subprocess with its pool costs seconds)."""
+    import importlib.util
+
+    from hdsim.cli import main
+
+    if "slowmodel" not in sys.modules:  # this test's copy, importable until the test ends
+        spec = importlib.util.spec_from_file_location("slowmodel", tmp_path / "slowmodel.py")
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        monkeypatch.setitem(sys.modules, "slowmodel", module)
+    monkeypatch.setenv("SLOW_LOG", str(log))
+    monkeypatch.setenv("SLOW_SLEEP", "0")
+    capsys.readouterr()
+    assert main(["sobol", *ARGS, "--out", str(out), *extra, "--workers", "1"]) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_main_process_killed_workers_die_and_study_resumes_at_once(tmp_path, monkeypatch, capsys):
     """What the OOM killer or a batch scheduler does: SIGKILL of the study process only.
 
     The two pool workers must not outlive it (they would hold the study file), and
     ``--resume`` one second later finishes with the indices of an uninterrupted study
-    and no finished row evaluated twice."""
+    and no finished row evaluated twice. The killed study runs as a subprocess with its
+    pool; the reference and the resume run in this process."""
     psutil = pytest.importorskip("psutil")
     (tmp_path / "slowmodel.py").write_text(SLOW_MODEL)
     small = ["--n", "128"]  # after ARGS' --n 256: argparse keeps the last
     total = 128 * 5
-    ref = _run(tmp_path, tmp_path / "ref.h5", tmp_path / "ref.log", extra=small, sleep=0.0)
+    ref = _run_here(tmp_path, monkeypatch, capsys, tmp_path / "ref.h5", tmp_path / "ref.log", extra=small)
 
     out, log = tmp_path / "cut.h5", tmp_path / "cut.log"
     proc = _run(tmp_path, out, log, extra=small, wait=False, sleep=0.006)
@@ -137,7 +157,7 @@ def test_main_process_killed_workers_die_and_study_resumes_at_once(tmp_path):
     rows, status = _rows_hex(out)
     done_at_kill = {rows[i] for i in np.flatnonzero(status == DONE)}
     before = _lines(log)
-    resumed = _run(tmp_path, out, log, extra=[*small, "--resume"], sleep=0.0)  # within the second
+    resumed = _run_here(tmp_path, monkeypatch, capsys, out, log, extra=[*small, "--resume"])  # within the second
     after = _lines(log)[len(before):]
     assert not set(after) & done_at_kill, "a finished row was evaluated again"
     for key in ("S1", "ST", "S1_conf", "ST_conf"):
