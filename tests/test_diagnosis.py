@@ -114,6 +114,35 @@ def test_a_residual_at_its_noise_floor_asks_more_of_the_next_family():
     assert FLOOR_HOLDOUT_GAIN > HOLDOUT_GAIN
 
 
+def _step(*ranked, reshaped=None):
+    from hdsim.identification.diagnosis import Step
+    from hdsim.identification.selection import Candidate
+
+    step = Step(effects=[], fit=None, fold_fits=[],
+                candidates=[Candidate.failed(f, f, "") for f, _ in ranked], reshaped=reshaped)
+    for c, (_, score) in zip(step.candidates, ranked):
+        c.score = score
+    return step
+
+
+def test_the_ranking_is_the_first_round_not_settled_by_a_change_of_form():
+    """A round that changed a family's form scored its candidates against a baseline the
+    diagnosis replaced; the ranking is the next round's. Without a change it is round 1;
+    a change and then a white residual (no candidates) leaves round 1's."""
+    from hdsim.identification.diagnosis import Diagnosis
+
+    def ranking(*steps):
+        d = Diagnosis(measurement=None, steps=list(steps), added=[], ambiguous=[], reshaped=[], fold_rule="",
+                      whiteness={}, findings_before=[], findings_after=[], seconds=0.0, passes=0)
+        return d.ranking_round, [c.family for c in d.ranking]
+
+    form = {"family": "friction", "from": "dahl", "to": "distributed_slip", "instead_of": "hardening"}
+    assert ranking(_step(("hardening", -5), ("backlash", -20)), _step()) == (1, ["backlash", "hardening"])
+    assert ranking(_step(("hardening", -200), ("backlash", -80), reshaped=form),
+                   _step(("backlash", -1500), ("hardening", -400))) == (2, ["backlash", "hardening"])
+    assert ranking(_step(("hardening", -200), reshaped=form), _step()) == (1, ["hardening"])
+
+
 def test_hidden_hardening_is_found_and_the_error_falls():
     meas, _ = stiffness(("hardening",), ("friction",), 1, n_rows=600)
     d = diagnose(meas, "friction")

@@ -101,7 +101,9 @@ def _print(s) -> None:
     key, unit = ("rmse_Nm", "N·m") if s["test"] == "running_torque" else ("rmse_rad", "rad")
     print(f"{s['test']} test: baseline {', '.join(s['baseline']['effects']) or '(base model)'}, "
           f"rms {s['baseline'][key]:.3g} {unit}")
-    print("ranking (first round, lower score is better):")
+    settled = s.get("ranking_round", 1)
+    print("ranking (first round, lower score is better):" if settled == 1 else
+          f"ranking (round {settled}, the first after the change of form below; lower score is better):")
     for c in s["ranking"]:
         if c["score"] is None:
             print(f"  {c['family']:<16} {c['effect']:<16} {c['why']}")
@@ -110,8 +112,10 @@ def _print(s) -> None:
               f"  {c['why']}")
     print(f"added: {', '.join(s['added']) or 'nothing'}")
     for r in s.get("reshaped", []):
-        print(f"other form: {r['family']} as {r['to']} instead of {r['from']} (round {r['round']}: it explained "
-              f"the residual better than adding {r['instead_of']}, score {r['score']:.1f})")
+        why = ("no family passed, this form explained the residual" if r["instead_of"] is None
+               else f"it explained the residual better than adding {r['instead_of']}")
+        print(f"other form: {r['family']} as {r['to']} instead of {r['from']} (round {r['round']}: {why}, "
+              f"score {r['score']:.1f})")
     inclusion = (s.get("confidence") or {}).get("inclusion")
     if inclusion:
         print("how sure (share of block-bootstrap resamples that add it): "

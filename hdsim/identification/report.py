@@ -294,6 +294,10 @@ def _ambiguity_text(a: dict) -> str:
 
 
 def _reshape_text(r: dict) -> str:
+    if r["instead_of"] is None:  # no candidate passed against the baseline; this form did
+        return (f"round {r['round']}: no family passed against the baseline, but {r['family']} as {r['to']} "
+                f"instead of {r['from']} explained the residual (score {r['score']:.1f}): the candidates were "
+                f"tried again against this form")
     return (f"round {r['round']}: {r['family']} as {r['to']} instead of {r['from']} explained the residual "
             f"better (score {r['score']:.1f}) than adding the round's best candidate, {r['instead_of']}: that "
             f"part of the residual was the shape of the {r['family']}; the next round started from this form")
