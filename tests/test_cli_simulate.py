@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from demo_checks import check_demo
 from hdsim.model.catalog import catalog_entry, load_unit, unit_names
 from hdsim.scenarios.run import read_run, run_scenario
 from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario
@@ -131,22 +132,7 @@ def test_demo_writes_both_default_unit_tests(tmp_path, cli, monkeypatch, png_ima
     code, stdout, err = cli("demo", "--json", cwd=tmp_path)
     assert code == 0, err
     assert sorted(asked) == ["lost_motion", "stiffness"]
-    data = json.loads(stdout)
-    unit, cat = load_unit(), catalog_entry("CSG-25-100")
-    elastic = rad_to_arcmin(0.08 * cat["rated_torque"] / cat["K1"])
-    assert data["elastic_lost_motion_arcmin"] == pytest.approx(elastic, rel=1e-12)
-    # closed forms (test_stiffness_catalog): elastic span + backlash; loss = 2·s_max
-    assert data["metrics"]["lost_motion_arcmin"] == pytest.approx(
-        elastic + rad_to_arcmin(float(unit.backlash.gap)), rel=0.01)
-    assert data["metrics"]["hysteresis_loss_arcmin"] == pytest.approx(
-        rad_to_arcmin(2 * float(unit.friction.slip_max)), rel=0.03)
-    folder = tmp_path / "hdsim-demo"
-    assert {"lost_motion.h5", "stiffness.h5", "lost_motion_loop.png", "stiffness_loop.png"} <= {
-        f.name for f in folder.iterdir()}
-    for name in ("lost_motion_loop.png", "stiffness_loop.png"):
-        png_image(folder / name)
-    stored = read_run(folder / "stiffness.h5")
-    assert stored.metrics["K1_Nm_per_rad"][0] == pytest.approx(data["metrics"]["K1_Nm_per_rad"])
+    check_demo(json.loads(stdout), tmp_path / "hdsim-demo", png_image)
 
 
 def test_no_verb_prints_help_and_exits_2(cli):

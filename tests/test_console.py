@@ -13,8 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from hdsim.scenarios.run import read_run
-from hdsim.model.catalog import catalog_entry, load_unit
+from demo_checks import check_demo
+from hdsim.model.catalog import load_unit
 from hdsim.units import rad_to_arcmin
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -56,22 +56,7 @@ def test_demo_console_script(tmp_path, png_image):
     """The README's main job, for real: both default-unit tests, figures and results."""
     p = console("demo", "--json", cwd=tmp_path)
     assert p.returncode == 0, p.stderr
-    data = json.loads(p.stdout)
-    unit, cat = load_unit(), catalog_entry("CSG-25-100")
-    elastic = rad_to_arcmin(0.08 * cat["rated_torque"] / cat["K1"])
-    assert data["elastic_lost_motion_arcmin"] == pytest.approx(elastic, rel=1e-12)
-    # closed forms (test_stiffness_catalog): elastic span + backlash; loss = 2·s_max
-    assert data["metrics"]["lost_motion_arcmin"] == pytest.approx(
-        elastic + rad_to_arcmin(float(unit.backlash.gap)), rel=0.01)
-    assert data["metrics"]["hysteresis_loss_arcmin"] == pytest.approx(
-        rad_to_arcmin(2 * float(unit.friction.slip_max)), rel=0.03)
-    folder = tmp_path / "hdsim-demo"
-    names = {f.name for f in folder.iterdir()}
-    assert {"lost_motion.h5", "stiffness.h5", "lost_motion_loop.png", "stiffness_loop.png"} <= names
-    for name in ("lost_motion_loop.png", "stiffness_loop.png"):
-        png_image(folder / name)
-    stored = read_run(folder / "stiffness.h5")
-    assert stored.metrics["K1_Nm_per_rad"][0] == pytest.approx(data["metrics"]["K1_Nm_per_rad"])
+    check_demo(json.loads(p.stdout), tmp_path / "hdsim-demo", png_image)
 
 
 def test_sobol_module():

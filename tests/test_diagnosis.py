@@ -143,6 +143,20 @@ def test_the_ranking_is_the_first_round_not_settled_by_a_change_of_form():
     assert ranking(_step(("hardening", -200), reshaped=form), _step()) == (1, ["hardening"])
 
 
+def test_a_one_rate_loss_that_stands_in_for_nothing_is_taken_out_again():
+    """Damping hidden, one loading rate, only damping and friction to try: the pair is
+    undecidable (−2783 against −2637). The better stands in the model while the rest is
+    tried; with nothing left to try nothing is added, and the model and the report are
+    those of the baseline: the pair with ``"added": false`` and no stand-in."""
+    cols, _ = truth.make_stiffness_data({"damping"}, set(), seed=7, n_rows=600, quarter_s=(1.0,))
+    meas = make_measurement("stiffness", cols["time_s"], cols["torque_Nm"], cols["angle_rad"], rated_torque=87.0)
+    d = diagnose(meas, None, families=["friction", "damping"])
+    assert d.added == [] and d.final is d.baseline and d.final.effects == []
+    assert [(sorted(a["families"]), a["added"], "provisional" in a) for a in d.ambiguous] == [
+        (["damping", "friction"], False, False)]
+    assert all(s.provisional is None for s in d.steps)
+
+
 def test_hidden_hardening_is_found_and_the_error_falls():
     meas, _ = stiffness(("hardening",), ("friction",), 1, n_rows=600)
     d = diagnose(meas, "friction")

@@ -155,6 +155,27 @@ def test_a_baseline_friction_in_another_form_uncovers_a_hard_gap(tmp_path):
     assert d.final.fit.rmse_rad < 0.4 * d.baseline.fit.rmse_rad
 
 
+@pytest.mark.slow
+def test_a_gap_behind_a_one_rate_loss_is_found_while_the_loss_stays_undecided(tmp_path):
+    """A closing gap and Coulomb-plus-viscous friction at one loading rate, a hardening in
+    the baseline. Friction and damping explain the loop equally well (−26.7, −23.8) and
+    the gap not at all (+0.5), so the diagnosis stopped with the pair. Now the friction
+    stands in for the loss, not added, the gap is tried against it (−1501) and added; the
+    pair is still reported with the second loading rate (zoo seed 62)."""
+    from hdsim.identification.report import write_report
+
+    d = _zoo_diagnosis(tmp_path, {"backlash": "closing_gap", "friction": "coulomb_viscous"}, {"hardening": "sinh"},
+                       "one_rate", 62)
+    assert d.added == ["backlash"]
+    assert [(sorted(a["families"]), a["added"], a.get("provisional")) for a in d.ambiguous] == [
+        (["damping", "friction"], False, "friction")]
+    assert "friction" in d.final.effects and d.final.fit.rmse_rad < 0.2 * d.baseline.fit.rmse_rad
+    write_report(d, tmp_path / "report", {"outcome": "improved", "next_measurement": "", "checks": []})
+    page = (tmp_path / "report" / "index.md").read_text()
+    assert "friction stood in the model for the loss (not added)" in page
+    assert "friction (stand-in, not added)" in page  # the before/after table
+
+
 # --------------------------------------------------------------------------- friction in series (slow)
 
 

@@ -60,26 +60,32 @@ def test_study_survives_a_lost_dask_worker():
     """A worker lost mid-study (closed under its running chunk, in this process): the
     scheduler recomputes what it held or ran elsewhere and the indices equal those of a
     local study. The same with a worker process killed by SIGKILL is the slow test below."""
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        _study_losing_a_worker(client, lambda: cluster.sync(cluster.workers[0].close))
+
+
+def _study_losing_a_worker(client, lose) -> None:
+    """A study on ``client`` during which ``lose()`` takes a worker away a third of the way
+    in; its indices must equal those of a local study."""
     import threading
     import time
 
     g = GFunction()
     local = run_study(g, g.problem(), 128, seed=4, workers=1, progress=False).analysis
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
-                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
-        holder = {}
+    holder = {}
 
-        def study():
-            holder["result"] = run_study(SlowG(), g.problem(), 128, seed=4, chunksize=16, progress=False,
-                                         executor=client.get_executor(pure=False))
+    def study():
+        holder["result"] = run_study(SlowG(), g.problem(), 128, seed=4, chunksize=16, progress=False,
+                                     executor=client.get_executor(pure=False))
 
-        thread = threading.Thread(target=study)
-        thread.start()
-        time.sleep(0.7)  # a third of the way in
-        assert thread.is_alive(), "study ended before a worker could be lost"
-        cluster.sync(cluster.workers[0].close)
-        thread.join(timeout=120)
-        assert not thread.is_alive()
+    thread = threading.Thread(target=study)
+    thread.start()
+    time.sleep(0.7)  # a third of the way in
+    assert thread.is_alive(), "study ended before a worker could be lost"
+    lose()
+    thread.join(timeout=120)
+    assert not thread.is_alive()
     remote = holder["result"].analysis
     for key in KEYS:
         np.testing.assert_array_equal(local[key], remote[key])
@@ -93,30 +99,11 @@ def test_study_survives_a_killed_dask_worker():
     import os
     import signal
     import sys
-    import threading
-    import time
 
     import cloudpickle
 
     cloudpickle.register_pickle_by_value(sys.modules[__name__])  # workers cannot import tests/
-    g = GFunction()
-    local = run_study(g, g.problem(), 128, seed=4, workers=1, progress=False).analysis
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster, distributed.Client(cluster) as client:
         pids = list(client.run(os.getpid).values())
-        holder = {}
-
-        def study():
-            holder["result"] = run_study(SlowG(), g.problem(), 128, seed=4, chunksize=16, progress=False,
-                                         executor=client.get_executor(pure=False))
-
-        thread = threading.Thread(target=study)
-        thread.start()
-        time.sleep(0.7)  # a third of the way in
-        assert thread.is_alive(), "study ended before a worker could be killed"
-        os.kill(pids[0], signal.SIGKILL)
-        thread.join(timeout=120)
-        assert not thread.is_alive()
-    remote = holder["result"].analysis
-    for key in KEYS:
-        np.testing.assert_array_equal(local[key], remote[key])
+        _study_losing_a_worker(client, lambda: os.kill(pids[0], signal.SIGKILL))

@@ -122,7 +122,8 @@ def _print(s) -> None:
               + ", ".join(f"{f} {p:.2f}" for f, p in sorted(inclusion.items(), key=lambda kv: -kv[1])))
     for a in s["ambiguous"]:
         rival = a["families"][1] + "".join(f" as {e}" for e in a.get("other_form", {}).values())
-        print(f"ambiguous: {a['families'][0]} vs {rival}; to separate them: {a['measurement']}")
+        held = f" ({a['provisional']} stands in the model for the loss, not added)" if a.get("provisional") else ""
+        print(f"ambiguous: {a['families'][0]} vs {rival}{held}; to separate them: {a['measurement']}")
     print(f"final: {', '.join(s['final']['effects']) or '(base model)'}, rms {s['final'][key]:.3g} {unit}")
     print(s["verdict"])
     print(f"outcome: {s['outcome']}" + (f"; to decide, record {s['next_measurement']}" if s["next_measurement"]

@@ -53,7 +53,10 @@ def assess(diagnosis_json: dict, data: dict, limits=None) -> tuple[str, str]:
     ranking = [c for c in diagnosis_json["ranking"] if c.get("score") is not None]
     reasons = (limits or _limits)(diagnosis_json, data, ranking)
     if added:
-        return ("found", "") if explained else ("improved", reasons[0] if reasons else "")
+        if explained:  # a loss one loading rate could not name still asks for its measurement
+            held = [a["measurement"] for a in diagnosis_json.get("ambiguous", []) if a.get("provisional")]
+            return "found", held[0] if held else ""
+        return "improved", reasons[0] if reasons else ""
     if explained:
         return "nothing_missing", ""
     if reasons:
@@ -71,8 +74,13 @@ def _limits(diagnosis_json: dict, data: dict, ranking: list) -> list[str]:
     """What kept this record from deciding, each as the measurement that would, most pressing first."""
     out = []
     rows = int(data.get("rows", 0))
-    n_eff = min((c.get("n_eff") or 0.0 for c in ranking), default=0.0)
-    if ranking and n_eff < MIN_EFFECTIVE_SAMPLES:
+    # the samples of the round where the diagnosis stopped: a candidate of an earlier round
+    # scored against a residual that a later addition took away (a gap with n_eff 2 behind
+    # a loss that was not yet in the model) says nothing about what keeps it from going on
+    last = next(([c for c in r["candidates"] if c.get("score") is not None]
+                 for r in reversed(diagnosis_json.get("rounds", [])) if r.get("candidates")), ranking)
+    n_eff = min((c.get("n_eff") or 0.0 for c in last), default=0.0)
+    if last and n_eff < MIN_EFFECTIVE_SAMPLES:
         out.append(f"more independent samples: the residual is correlated over many rows (about {n_eff:.0f} "
                    f"independent samples of {rows}); record more cycles, or the same cycle more slowly "
                    "with less filtering")

@@ -223,7 +223,8 @@ def _rows(diagnosis):
         score = "" if row["score"] is None else f"{row['score']:.1f}"
         hold = ", ".join(f"{h * arcsec:.2f}" for h in row["holdout_rmse_rad"])
         changed = ", ".join(f"{f} as {e}" for f, e in (row.get("other_form") or {}).items())
-        rows.append([str(row["step"]), "+".join(row["effects"]) or "base", row["added"] or changed,
+        held = f"{row['provisional']} (stand-in, not added)" if row.get("provisional") else ""
+        rows.append([str(row["step"]), "+".join(row["effects"]) or "base", row["added"] or changed or held,
                      f"{row['rmse_rad'] * arcsec:.2f}", f"{row['max_abs_error_rad'] * arcsec:.2f}",
                      hold, score])
     return rows
@@ -287,6 +288,10 @@ def _ambiguity_text(a: dict) -> str:
         form = a["other_form"][second]
         return (f"{first}, and {second} as {form} instead, explain the residual about equally well; {first} "
                 f"was added; to separate them: {a['measurement']}")
+    if a.get("provisional"):
+        return (f"{first} and {second}: this record cannot tell them apart, so neither was added; "
+                f"{a['provisional']} stood in the model for the loss (not added) while the other families "
+                f"were tried against it; to separate them: {a['measurement']}")
     if a.get("added") is False:
         return (f"{first} and {second}: this record cannot tell them apart, so neither was added; "
                 f"to separate them: {a['measurement']}")
