@@ -367,7 +367,7 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
         # error by 3 %): a form that passes is taken and the candidates are tried again
         # against it. Only on the baseline: the user names families, not forms, and every
         # later round's families have had their forms tried in the round that added one
-        # (a round that stops costs one lockstep more, 5 s of the 20,000-row bench)
+        # (in every round that stops, it would cost the 20,000-row bench 5 s more)
         forms = _other_forms(current, {r["family"] for r in reshaped})
         on_baseline = not added and not reshaped and not whiteness(step.fit.residual)["explained"]
         if forms and (best is not None or on_baseline):
@@ -425,9 +425,11 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
     held = next((k for k, s in enumerate(steps) if s.provisional is not None), None)
     if held is not None and not any(s.added for s in steps[held:]):
         # nothing was added once the loss stood in: the record said no more than the pair,
-        # and the model stays the one before it
+        # and the model stays the one before it (a form changed against the stand-in goes too)
         del steps[held + 1:]
         steps[held].provisional = None
+        reshaped = [r for r in reshaped if r["round"] <= held]
+        ambiguous = [a for a in ambiguous if a["round"] <= held + 1]
         next(a for a in ambiguous if "provisional" in a).pop("provisional")
         step = steps[held]
     w = whiteness(step.fit.residual)
