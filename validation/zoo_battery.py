@@ -3,7 +3,7 @@
     python validation/zoo_battery.py [--seeds 8] [--first-seed 0] [--workers 2]
                                      [--only single:friction,nothing,two] [--max-rows N]
                                      [--leave-one-form-out [--tuning-forms friction:bouc_wen,...]]
-                                     [--from earlier.json] [--list]
+                                     [--from earlier.json ...] [--list]
 
 Data come from ``tests/truth_zoo.py`` (laws in ``tests/truth_zoo_forms.py``, no
 ``hdsim`` code): several forms per family (friction: generalised Maxwell-slip, LuGre,
@@ -352,8 +352,8 @@ def main(argv=None) -> int:
                         help="also print the rates of the tuning forms and of the held-out forms apart")
     parser.add_argument("--tuning-forms", default=",".join(tz.TUNING_FORMS),
                         help="family:form list of the forms the diagnosis was tuned on")
-    parser.add_argument("--from", dest="source", type=Path, default=None,
-                        help="summarise the cases of an earlier run's JSON instead of running")
+    parser.add_argument("--from", dest="source", type=Path, nargs="+", default=None,
+                        help="summarise the cases of earlier runs' JSON files (pooled) instead of running")
     parser.add_argument("--list", action="store_true", help="print the cases (group, seed, profile, forms) and exit")
     parser.add_argument("--out", type=Path, default=OUT)
     args = parser.parse_args(argv)
@@ -371,7 +371,7 @@ def main(argv=None) -> int:
         return 0
     start = time.perf_counter()
     if args.source:
-        rows = json.loads(args.source.read_text())["cases"]
+        rows = [r for path in args.source for r in json.loads(path.read_text())["cases"]]
         rows = [r for r in rows if r["group"] in groups]
     else:
         rows = run_cases(cases, args.workers, args.max_rows)
