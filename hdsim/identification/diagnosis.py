@@ -231,7 +231,8 @@ class Diagnosis:
             "rounds": [{"effects": list(s.effects), "rmse_rad": s.fit.rmse_rad,
                         "candidates": [c.to_json() for c in sorted(s.candidates, key=lambda c: c.score)],
                         "other_forms": [c.to_json() for c in sorted(s.reshapes, key=lambda c: c.score)],
-                        "added": s.added, "reshaped": s.reshaped} for s in self.steps],
+                        "added": s.added, "reshaped": s.reshaped, "provisional": s.provisional}
+                       for s in self.steps],
             "table": self.table(),
             "holdout": self.fold_rule,
             "whiteness": dict(self.whiteness),
