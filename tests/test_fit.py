@@ -467,12 +467,15 @@ def test_an_optimiser_trial_far_out_is_still_a_valid_model(K0, ratio):
 def test_a_second_friction_start_escapes_the_basin_of_a_reversing_ke_run(tmp_path):
     """Independent truth (the zoo's LuGre friction holding the body's windup, a hard gap,
     a brake load reversing with the output): from the data's start values alone the fit
-    of backlash + friction + kinematic error stops 44 arcsec rms from the record; the
+    of backlash + friction + kinematic error stops 17.9 arcsec rms from the record; the
     friction's second start (half the largest torque, `Effect.other_starts`) reaches
-    4.7 arcsec (the noise is 0.33: LuGre's stiction is not Dahl's)."""
+    3.6 arcsec (LuGre's stiction is not Dahl's). Zoo seed 5; on seed 0, where the basin
+    was first seen (44 against 4.7 arcsec), the single start has reached 5.1 arcsec since
+    the evaluator's step grid comes from the torque alone, and of 18 such records (seeds
+    0-5, three profiles) two still need the second start."""
     import truth_zoo as tz
 
-    cols, meta, _ = tz.make_case({"kinematic_error": "with_windup"}, {"backlash": "hard_gap"}, "one_rate", 0,
+    cols, meta, _ = tz.make_case({"kinematic_error": "with_windup"}, {"backlash": "hard_gap"}, "one_rate", 5,
                                  max_rows=6000)
     path = tmp_path / "ke.csv"
     tz.write_csv(path, cols, meta)
