@@ -154,7 +154,7 @@ class Diagnosis:
     @property
     def ranking_round(self) -> int:
         """The round (1-based) whose candidates are `ranking`: the first round settled by an
-        addition or a stop, not by a change of form.
+        addition, a one-rate stand-in or a stop, not by a change of form.
 
         A round settled by a change of form (the proxy guard) found that the residual was
         the shape of a family already in the model (friction named by the user, fitted as
@@ -340,7 +340,8 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
         todo = [f for f in pool if f not in current and f not in undecidable]
         if not todo or (max_rounds is not None and len(added) >= max_rounds):
             break
-        if whiteness(step.fit.residual)["white"]:
+        residual_test = whiteness(step.fit.residual)  # once a round: the stop and the guard read it
+        if residual_test["white"]:
             break
         # one lockstep for the round: every candidate on all rows and on each hold-out
         # fold, each from the baseline's values and afresh. A pass costs about the same
@@ -366,11 +367,13 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
         # the form of a family the user named may be what hides the missing one (Preisach
         # friction fitted as Dahl leaves a residual against which a hard gap lowers the
         # error by 3 %): a form that passes is taken and the candidates are tried again
-        # against it. Only on the baseline: the user names families, not forms, and every
-        # later round's families have had their forms tried in the round that added one
-        # (in every round that stops, it would cost the 20,000-row bench 5 s more)
+        # against it. Only while nothing has been added and no form changed (the user's
+        # baseline, with a one-rate loss standing in if there is one): the user names
+        # families, not forms, and every later round's families have had their forms
+        # tried in the round that added one (in every round that stops, it would cost the
+        # 20,000-row bench 5 s more)
         forms = _other_forms(current, {r["family"] for r in reshaped})
-        on_baseline = not added and not reshaped and not whiteness(step.fit.residual)["explained"]
+        on_baseline = not added and not reshaped and not residual_test["explained"]
         if forms and (best is not None or on_baseline):
             step.reshapes, n = _lockstep(forms, unit, meas, ev, masks, step, unit_name)
             passes += n
@@ -402,15 +405,14 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
             # one loading rate cannot say whether this loss grows with the rate: report
             # the pair and the measurement that separates it, add neither
             by_family = {c.family: c.score for c in scored}
-            entry = {"families": pair, "scores": [by_family.get(f) for f in pair],
-                     "round": round_no, "measurement": separating(*pair), "added": False}
-            ambiguous.append(entry)
+            ambiguous.append({"families": pair, "scores": [by_family.get(f) for f in pair],
+                              "round": round_no, "measurement": separating(*pair), "added": False})
             if set(pair) & set(current):
                 break  # the question is whether the loss in the model grows with the rate
             # a loss is missing and only its rate law is undecidable: it stands in the model,
             # not added, while the families that do not hinge on the rate are tried (a gap
             # behind a one-rate friction is invisible until the loss is in: score +0.5)
-            entry["provisional"] = step.provisional = best.family
+            step.provisional = best.family
             undecidable |= set(pair)
             step = _advance(steps, current, best)
             continue
@@ -431,8 +433,10 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
         steps[held].provisional = None
         reshaped = [r for r in reshaped if r["round"] <= held]
         ambiguous = [a for a in ambiguous if a["round"] <= held + 1]
-        next(a for a in ambiguous if "provisional" in a).pop("provisional")
         step = steps[held]
+    elif held is not None:  # the stand-in stays: its pair's entry names it
+        pair_entry = next(a for a in ambiguous if a["round"] == held + 1 and a["added"] is False)
+        pair_entry["provisional"] = steps[held].provisional
     w = whiteness(step.fit.residual)
     return Diagnosis(measurement=meas, steps=steps, added=added, ambiguous=ambiguous, reshaped=reshaped,
                      fold_rule=rule,
