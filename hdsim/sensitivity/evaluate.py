@@ -266,13 +266,21 @@ def evaluate(func, X, executor=None, *, workers=2, chunksize=None, rows=None,
     return out
 
 
+#: times a chunk cancelled by the executor itself (not by us) is submitted again before the
+#: study gives up; Dask cancels a task when the worker holding it leaves under some races
+CANCELLED_CHUNK_RETRIES = 3
+
+
 def _run_pool(pool, func, X, spans, rows, out, on_chunk, bar, window):
-    todo, pending = iter(spans), {}
+    todo, pending, cancelled = iter(spans), {}, {}
+
+    def submit(span):
+        pending[pool.submit(run_chunk, func, _rows(X, *span))] = span
 
     def submit_next():
         span = next(todo, None)
         if span is not None:
-            pending[pool.submit(run_chunk, func, _rows(X, *span))] = span
+            submit(span)
 
     for _ in range(window):  # a bounded window keeps memory flat for huge designs
         submit_next()
@@ -280,8 +288,19 @@ def _run_pool(pool, func, X, spans, rows, out, on_chunk, bar, window):
         while pending:
             done, _ = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
             for fut in done:
-                s, e = pending.pop(fut)
-                _collect(out, s, e, fut.result(), rows, on_chunk, bar)
+                span = pending.pop(fut)
+                if fut.cancelled():
+                    # Nobody here cancelled it: the executor lost it (a worker that left).
+                    # Rows are pure and addressed by index, so running the chunk again is safe.
+                    cancelled[span] = cancelled.get(span, 0) + 1
+                    if cancelled[span] > CANCELLED_CHUNK_RETRIES:
+                        raise RuntimeError(
+                            f"the executor cancelled the chunk of rows {rows[span[0]]}-{rows[span[1] - 1]} "
+                            f"{cancelled[span]} times (workers lost?); what finished is kept, "
+                            "rerun with --resume")
+                    submit(span)
+                    continue
+                _collect(out, *span, fut.result(), rows, on_chunk, bar)
                 submit_next()
     except BaseException:
         for fut in pending:

@@ -1,0 +1,45 @@
+"""Chunks that an executor cancels by itself (a Dask worker leaving under some races
+cancels the tasks it held) run again; rows land at their index whatever the order."""
+
+import concurrent.futures as cf
+
+import numpy as np
+import pytest
+
+from hdsim.sensitivity import Ishigami, evaluate
+
+
+class CancellingExecutor(cf.Executor):
+    """Runs tasks at once, but hands back a cancelled future for the first ``times``
+    submissions of the chunk that starts with row ``row`` (compared by value)."""
+
+    def __init__(self, X, row, times):
+        self.first_row, self.times, self.submitted = X[row], times, 0
+
+    def submit(self, fn, *args):
+        self.submitted += 1
+        fut = cf.Future()
+        chunk = args[1]
+        if self.times and np.array_equal(chunk[0], self.first_row):
+            self.times -= 1
+            fut.cancel()
+            fut.set_running_or_notify_cancel()  # as Dask's wrapper does, so wait() wakes
+            return fut
+        fut.set_result(fn(*args))
+        return fut
+
+
+def test_a_chunk_the_executor_cancelled_runs_again_and_lands_at_its_rows():
+    model = Ishigami()
+    X = np.random.default_rng(0).uniform(-np.pi, np.pi, (40, 3))
+    pool = CancellingExecutor(X, row=16, times=2)
+    out = evaluate(model, X, pool, chunksize=8, progress=False)
+    np.testing.assert_array_equal(out.y, model(X))
+    assert out.ok.all() and out.completed == 40
+    assert pool.submitted == 5 + 2  # five chunks, one of them submitted twice more
+
+
+def test_a_chunk_cancelled_again_and_again_stops_the_study_with_a_message():
+    X = np.random.default_rng(0).uniform(-np.pi, np.pi, (40, 3))
+    with pytest.raises(RuntimeError, match="cancelled the chunk of rows 16-23 4 times"):
+        evaluate(Ishigami(), X, CancellingExecutor(X, row=16, times=10), chunksize=8, progress=False)
