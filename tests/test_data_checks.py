@@ -138,6 +138,14 @@ def _diagnosis(added=(), success=False, n_eff=500.0, ambiguous=(), first="harden
      "second loading rate"),
     (_diagnosis([], False, ambiguous=[{"families": ["friction", "backlash"], "measurement": "a slower cycle"}]),
      {"reversals": 7, "loading_rates": 2}, "cannot_decide", "a slower cycle"),
+    # a loss one rate could not name (the pair reported, neither added) is never "nothing
+    # missing", and a found family does not silence its measurement
+    (_diagnosis([], True, ambiguous=[{"families": ["damping", "friction"], "measurement": "a second rate",
+                                      "added": False}]), {"reversals": 7, "loading_rates": 1},
+     "cannot_decide", "a second rate"),
+    (_diagnosis(["hardening"], True, ambiguous=[{"families": ["damping", "friction"], "measurement": "a second rate",
+                                                 "added": False}]), {"reversals": 7, "loading_rates": 1},
+     "found", "a second rate"),
 ])
 def test_outcomes_are_honest(diagnosis, data, outcome, says):
     got, next_measurement = assess(diagnosis, data)

@@ -157,6 +157,28 @@ def test_a_one_rate_loss_that_stands_in_for_nothing_is_taken_out_again():
     assert all(s.provisional is None for s in d.steps)
 
 
+def test_a_loss_left_beside_its_partner_at_one_rate_is_the_pairs_question():
+    """Nothing passes, and the best-scored candidate is damping with friction in the model:
+    with evidence (score below the threshold) and both hold-out folds better, the pair is
+    the question left; without either, or with the partner absent, or another family
+    best, there is none."""
+    from hdsim.identification.selection import Candidate, rate_question_left
+
+    def cand(family, score, folds=(0.05, 0.03)):
+        c = Candidate.failed(family, family, "")
+        c.fit, c.score, c.holdout_gain = object(), score, list(folds)
+        return c
+
+    friction_in = {"friction": "dahl", "hardening": "tanh"}
+    assert rate_question_left([cand("damping", -96.0), cand("backlash", 4.0)], friction_in) == ["damping", "friction"]
+    assert rate_question_left([cand("friction", -40.0)], {"damping": "kelvin_voigt"}) == ["damping", "friction"]
+    assert rate_question_left([cand("damping", -96.0)], {"hardening": "tanh"}) is None        # no partner
+    assert rate_question_left([cand("damping", -3.0)], friction_in) is None                   # no evidence
+    assert rate_question_left([cand("damping", -96.0, (0.07, -0.02))], friction_in) is None  # one fold worse
+    assert rate_question_left([cand("backlash", -50.0), cand("damping", -40.0)], friction_in) is None
+    assert rate_question_left([], friction_in) is None
+
+
 def test_hidden_hardening_is_found_and_the_error_falls():
     meas, _ = stiffness(("hardening",), ("friction",), 1, n_rows=600)
     d = diagnose(meas, "friction")

@@ -83,7 +83,8 @@ from hdsim.model.drive import SLOTS
 from hdsim.identification.confidence import diagnosis_confidence
 from hdsim.identification.folds import folds, one_loading_rate
 from hdsim.identification.selection import (HOLDOUT_GAIN, MIN_GAIN, SCORE_THRESHOLD, SEPARATING, Candidate,
-                                            near_tie, rate_ambiguity, score_candidate, separating)
+                                            near_tie, rate_ambiguity, rate_question_left,
+                                            score_candidate, separating)
 from hdsim.identification.residuals import findings, whiteness
 
 __all__ = ["Diagnosis", "diagnose", "folds", "SEPARATING", "SCORE_THRESHOLD",
@@ -399,14 +400,17 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
                 step = _advance(steps, current, form)
                 continue
         if best is None:
+            # a loss that explains part of what is left, beside its partner, but too little
+            # to be added: at one rate that is the pair's question, not "nothing more"
+            pair = rate_question_left(ranked, current) if one_rate else None
+            if pair is not None:
+                ambiguous.append(_pair_entry(pair, scored, round_no))
             break
         pair = rate_ambiguity(best, scored, current) if one_rate else None
         if pair is not None:
             # one loading rate cannot say whether this loss grows with the rate: report
             # the pair and the measurement that separates it, add neither
-            by_family = {c.family: c.score for c in scored}
-            ambiguous.append({"families": pair, "scores": [by_family.get(f) for f in pair],
-                              "round": round_no, "measurement": separating(*pair), "added": False})
+            ambiguous.append(_pair_entry(pair, scored, round_no))
             if set(pair) & set(current):
                 break  # the question is whether the loss in the model grows with the rate
             # a loss is missing and only its rate law is undecidable: it stands in the model,
@@ -515,3 +519,10 @@ def _tie_entry(best: Candidate, rival: Candidate, round_no: int, **extra) -> dic
     """The ``ambiguous`` entry of a near-tie in which ``best`` is added."""
     return {"families": [best.family, rival.family], "scores": [best.score, rival.score], "round": round_no,
             "measurement": separating(best.family, rival.family), "added": True, **extra}
+
+
+def _pair_entry(pair: list, scored: list, round_no: int) -> dict:
+    """The ambiguous entry of the damping/friction pair one loading rate cannot separate."""
+    by_family = {c.family: c.score for c in scored}
+    return {"families": pair, "scores": [by_family.get(f) for f in pair], "round": round_no,
+            "measurement": separating(*pair), "added": False}

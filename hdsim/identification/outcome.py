@@ -52,13 +52,15 @@ def assess(diagnosis_json: dict, data: dict, limits=None) -> tuple[str, str]:
     added = diagnosis_json["added"]
     ranking = [c for c in diagnosis_json["ranking"] if c.get("score") is not None]
     reasons = (limits or _limits)(diagnosis_json, data, ranking)
+    # a loss one loading rate could not name (a pair reported, neither of it added) still
+    # asks for its measurement, and nothing can be "missing nothing" while it is open
+    open_pairs = [a["measurement"] for a in diagnosis_json.get("ambiguous", []) if a.get("added") is False]
     if added:
-        if explained:  # a loss one loading rate could not name still asks for its measurement
-            held = [a["measurement"] for a in diagnosis_json.get("ambiguous", []) if a.get("provisional")]
-            return "found", held[0] if held else ""
+        if explained:
+            return "found", open_pairs[0] if open_pairs else ""
         return "improved", reasons[0] if reasons else ""
     if explained:
-        return "nothing_missing", ""
+        return ("cannot_decide", open_pairs[0]) if open_pairs else ("nothing_missing", "")
     if reasons:
         return "cannot_decide", reasons[0]
     if diagnosis_json.get("test") == "running_torque":

@@ -17,7 +17,7 @@ from hdsim.identification.fit import FitResult, effective_n
 from hdsim.identification.residuals import whiteness
 
 __all__ = ["Candidate", "score_candidate", "rule", "holdout_gain_needed", "rate_ambiguity", "explains_as_well",
-           "near_tie", "separating", "SEPARATING", "SCORE_THRESHOLD", "HOLDOUT_GAIN", "FLOOR_HOLDOUT_GAIN", "MIN_GAIN", "TIE_FRACTION",
+           "near_tie", "rate_question_left", "separating", "SEPARATING", "SCORE_THRESHOLD", "HOLDOUT_GAIN", "FLOOR_HOLDOUT_GAIN", "MIN_GAIN", "TIE_FRACTION",
            "STRONG_HOLDOUT_GAIN", "SHAPE_MARGIN", "RATE_PAIR"]
 
 #: accept only below this score (ΔBIC with the effective sample size)
@@ -136,6 +136,38 @@ def rate_ambiguity(best: Candidate, scored: list, current: dict):
     if rival is None or not explains_as_well(best.score, rival.score):
         return None
     return sorted(RATE_PAIR)
+
+
+def rate_question_left(ranked: list, current: dict):
+    """The damping–friction pair when, at one loading rate, nothing passes yet a loss is left.
+
+    The rate-pair family best scored of all is one whose partner is already in the model,
+    and it explains part of the residual: evidence (score below the threshold) and a
+    better prediction of *both* hold-out folds, only too little of it to be added (the
+    gain floors). One rate cannot say whether that loss grows with the rate (a damping)
+    or is the friction's own shape (its form), so the pair is reported with the second
+    rate that separates them instead of a silent "nothing more" (zoo: a damping at 3x
+    the noise beside a LuGre friction at one rate, score -96, hold-out gain 5 %).
+
+    Parameters
+    ----------
+    ranked : list of Candidate
+        The round's candidates, best score first.
+    current : dict
+        Family -> effect of the model they were scored against.
+
+    Returns
+    -------
+    list of str or None
+        ``["damping", "friction"]``, or None.
+    """
+    if not ranked or ranked[0].family not in RATE_PAIR or ranked[0].fit is None:
+        return None
+    top = ranked[0]
+    if not (RATE_PAIR - {top.family}) <= set(current):
+        return None
+    predicts = len(top.holdout_gain) == 2 and min(top.holdout_gain) > 0.0
+    return sorted(RATE_PAIR) if top.score < SCORE_THRESHOLD and predicts else None
 
 
 def near_tie(best_score: float, rival_score: float) -> bool:
