@@ -53,7 +53,9 @@ Procedure
    separate them (`SEPARATING`); the better one is still added. At one loading rate,
    damping and friction are not told apart by a guess: when one is best and the other
    is in the model, or explains the residual within max(20, 25 %) of it, neither is
-   added and the pair is reported (`hdsim.identification.selection.rate_ambiguity`).
+   added and the pair is reported (`hdsim.identification.selection.rate_ambiguity`). The
+   pair is reported too when nothing passes but one of it, beside its partner, explains
+   part of what is left (`hdsim.identification.selection.rate_question_left`).
 7. *How sure*: block-bootstrap inclusion probabilities and a ``loo_compare``-style table
    per round (`hdsim.identification.confidence`).
 

@@ -17,8 +17,8 @@ from hdsim.identification.fit import FitResult, effective_n
 from hdsim.identification.residuals import whiteness
 
 __all__ = ["Candidate", "score_candidate", "rule", "holdout_gain_needed", "rate_ambiguity", "explains_as_well",
-           "near_tie", "rate_question_left", "separating", "SEPARATING", "SCORE_THRESHOLD", "HOLDOUT_GAIN", "FLOOR_HOLDOUT_GAIN", "MIN_GAIN", "TIE_FRACTION",
-           "STRONG_HOLDOUT_GAIN", "SHAPE_MARGIN", "RATE_PAIR"]
+           "near_tie", "rate_question_left", "separating", "SEPARATING", "SCORE_THRESHOLD", "HOLDOUT_GAIN",
+           "FLOOR_HOLDOUT_GAIN", "MIN_GAIN", "TIE_FRACTION", "STRONG_HOLDOUT_GAIN", "SHAPE_MARGIN", "RATE_PAIR"]
 
 #: accept only below this score (ΔBIC with the effective sample size)
 SCORE_THRESHOLD = -10.0
