@@ -15,6 +15,11 @@ from hdsim.simulation.solver import SolverOptions
 NAMES = ["h_pz", "h_c", "R_v", "R_k", "h_p"]
 
 
+def _one_cycle():
+    """The shipped lost-motion test with one load cycle instead of two (a third of the time)."""
+    return load_scenario(builtin_scenario_path("lost_motion")).with_updates({"load.cycles": 1})
+
+
 def test_batched_rows_match_individual_runs():
     """A batch integrates each row as a single run would: at the default rtol 1e-6 the rows
     agree with single runs to 1e-5; the study's own function (rtol 1e-4, whose global error
@@ -22,7 +27,7 @@ def test_batched_rows_match_individual_runs():
 
     One load cycle of the lost-motion test instead of two (a third of the time): measured
     5e-6 between batch and single rows, 1.3e-4 between the study and rtol 1e-8."""
-    scenario = load_scenario(builtin_scenario_path("lost_motion")).with_updates({"load.cycles": 1})
+    scenario = _one_cycle()
     f = model_function("CSG-25-100", NAMES, "lost_motion_arcmin", scenario=scenario)
     nominal = np.array(list(nominal_values("CSG-25-100", NAMES).values()))
     rng = np.random.default_rng(3)
@@ -39,8 +44,7 @@ def test_batched_rows_match_individual_runs():
 
 
 def test_impossible_rows_are_nan_and_do_not_spoil_the_batch():
-    one_cycle = load_scenario(builtin_scenario_path("lost_motion")).with_updates({"load.cycles": 1})
-    f = model_function("CSG-25-100", ["h_pz", "h_p"], "lost_motion_arcmin", scenario=one_cycle)
+    f = model_function("CSG-25-100", ["h_pz", "h_p"], "lost_motion_arcmin", scenario=_one_cycle())
     X = np.array([[1.0e-3, 0.3e-3], [1.0e-3, 1.2e-3], [1.05e-3, 0.3e-3]])  # row 1: undercut too deep
     y = f(X)
     assert np.isnan(y[1]) and np.isfinite(y[[0, 2]]).all()

@@ -166,7 +166,7 @@ def test_a_loss_left_beside_its_partner_at_one_rate_is_the_pairs_question():
 
     def cand(family, score, folds=(0.05, 0.03)):
         c = Candidate.failed(family, family, "")
-        c.fit, c.score, c.holdout_gain = object(), score, list(folds)
+        c.score, c.holdout_gain = score, list(folds)
         return c
 
     friction_in = {"friction": "dahl", "hardening": "tanh"}

@@ -288,13 +288,11 @@ def _ambiguity_text(a: dict) -> str:
         form = a["other_form"][second]
         return (f"{first}, and {second} as {form} instead, explain the residual about equally well; {first} "
                 f"was added; to separate them: {a['measurement']}")
-    if a.get("provisional"):
-        return (f"{first} and {second}: this record cannot tell them apart, so neither was added; "
-                f"{a['provisional']} stood in the model for the loss (not added) while the other families "
-                f"were tried against it; to separate them: {a['measurement']}")
     if a.get("added") is False:
+        held = (f"{a['provisional']} stood in the model for the loss (not added) while the other families "
+                f"were tried against it; " if a.get("provisional") else "")
         return (f"{first} and {second}: this record cannot tell them apart, so neither was added; "
-                f"to separate them: {a['measurement']}")
+                f"{held}to separate them: {a['measurement']}")
     return f"{first} and {second} explain the residual about equally well; to separate them: {a['measurement']}"
 
 

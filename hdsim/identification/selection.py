@@ -161,9 +161,9 @@ def rate_question_left(ranked: list, current: dict):
     list of str or None
         ``["damping", "friction"]``, or None.
     """
-    if not ranked or ranked[0].family not in RATE_PAIR or ranked[0].fit is None:
+    if not ranked or ranked[0].family not in RATE_PAIR:
         return None
-    top = ranked[0]
+    top = ranked[0]  # one that could not be fitted scores +inf and has no folds: never a question
     if not (RATE_PAIR - {top.family}) <= set(current):
         return None
     predicts = len(top.holdout_gain) == 2 and min(top.holdout_gain) > 0.0
