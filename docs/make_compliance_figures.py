@@ -19,7 +19,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from hdsim.model.catalog import load_unit, unit_names  # noqa: E402
+from hdsim.model.catalog import load_unit  # noqa: E402
+from hdsim.model.datasheet import unit_names  # noqa: E402
 from hdsim.model.fe_check import corner_shapes, fe_cup_check  # noqa: E402
 from hdsim.physics.compliance import rim_between_balls_stiffness  # noqa: E402
 from hdsim.physics.fe_rim import rim_radial_stiffness_fe  # noqa: E402

@@ -19,7 +19,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from hdsim.model.catalog import catalog_entry, load_unit, unit_names  # noqa: E402
+from hdsim.model.catalog import load_unit  # noqa: E402
+from hdsim.model.datasheet import catalog_entry, unit_names  # noqa: E402
 from hdsim.model.drive import compliance_chain, radial_support  # noqa: E402
 from hdsim.physics import backlash as bl  # noqa: E402
 from hdsim.physics import compliance as cc  # noqa: E402

@@ -20,7 +20,7 @@ print(run.metric("lost_motion_arcmin"))
 | `Run`, `read_run` | a finished run (`.metric`, `.save`) and reading one back |
 | `sobol` | Sobol' indices of a metric with respect to parameters of any drive |
 | `load_measurement` | a bench measurement file (CSV or HDF5) |
-| `fit`, `diagnose` | fit a model to a measurement; find the effects it lacks |
+| `fit`, `diagnose` | fit a model to a measurement; find the effects it lacks, with the data checks, the outcome, the next measurement and the report |
 
 `import hdsim` stays light: each name is imported from its module the first time it
 is used, so the solvers, HDF5 and plotting load only when needed.
@@ -31,7 +31,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING
 
-__version__ = "0.1.0"
+from hdsim._version import __version__
 
 #: public name -> module defining it (imported on first access)
 _EXPORTS = {
@@ -44,15 +44,14 @@ _EXPORTS = {
     "read_run": "hdsim.scenarios.run",
     "sobol": "hdsim.sensitivity.api",
     "load_measurement": "hdsim.io.measurement",
-    "fit": "hdsim.identification.fit",
-    "diagnose": "hdsim.identification.diagnosis",
+    "fit": "hdsim.identification.workflow",
+    "diagnose": "hdsim.identification.workflow",
 }
 
 __all__ = ["__version__", *_EXPORTS]
 
 if TYPE_CHECKING:  # type checkers and IDEs see the real signatures
-    from hdsim.identification.diagnosis import diagnose
-    from hdsim.identification.fit import fit
+    from hdsim.identification.workflow import diagnose, fit
     from hdsim.io.measurement import load_measurement
     from hdsim.model.catalog import load_unit
     from hdsim.model.drive import HarmonicDrive

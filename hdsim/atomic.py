@@ -58,3 +58,28 @@ def write_text_atomic(target: str | os.PathLike, text: str) -> None:
     """
     with atomic_path(target) as tmp:
         tmp.write_text(text)
+
+
+def check_writable_folder(folder: str | os.PathLike) -> Path:
+    """Make sure results can be written into ``folder`` before any work is done.
+
+    The folder (and its parents) is created if missing, and a temporary file is created
+    and removed in it.
+
+    Raises
+    ------
+    hdsim.errors.InputError
+        One line naming the folder and the cause (read-only, no permission, not a folder,
+        full disk): an environment the user must fix, not a failure of the program.
+    """
+    from hdsim.errors import InputError
+
+    folder = Path(folder)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=".hdsim-write-check.", dir=folder)
+        os.close(fd)
+        os.unlink(tmp)
+    except OSError as exc:
+        raise InputError(f"cannot write into {folder}: {exc.strerror or exc}") from None
+    return folder

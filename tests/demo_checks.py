@@ -3,7 +3,8 @@ and through the console script (``test_console.py``, ``-m slow``)."""
 
 import pytest
 
-from hdsim.model.catalog import catalog_entry, load_unit
+from hdsim.model.catalog import load_unit
+from hdsim.model.datasheet import catalog_entry
 from hdsim.scenarios.run import read_run
 from hdsim.units import rad_to_arcmin
 

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from demo_checks import check_demo
-from hdsim.model.catalog import catalog_entry, load_unit, unit_names
+from hdsim.model.catalog import load_unit
+from hdsim.model.datasheet import catalog_entry, unit_names
 from hdsim.scenarios.run import read_run, run_scenario
 from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario
 from hdsim.units import rad_to_arcmin

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from hdsim.model.catalog import load_unit, nominal_geometry, unit_names
+from hdsim.model.catalog import load_unit
+from hdsim.model.datasheet import nominal_geometry, unit_names
 from hdsim.errors import InputError
 from hdsim.physics import compliance as cc
 
@@ -175,7 +176,7 @@ def test_every_term_of_the_chain_follows_similitude():
     force per length, by s) scales every torsional compliance by s⁻³ exactly."""
     from dataclasses import fields
 
-    from hdsim.model.catalog import nominal_wave_generator
+    from hdsim.model.datasheet import nominal_wave_generator
     from hdsim.model.drive import WaveGenerator, compliance_chain
 
     s = 1.7

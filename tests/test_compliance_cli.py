@@ -7,7 +7,8 @@ import json
 import pytest
 
 from hdsim.cli import main
-from hdsim.model.catalog import catalog_entry, load_unit
+from hdsim.model.catalog import load_unit
+from hdsim.model.datasheet import catalog_entry
 
 SEGMENTS = ("diaphragm", "end_radius", "cylinder", "lead_radius", "undercut")
 

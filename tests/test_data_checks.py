@@ -12,9 +12,10 @@ import pytest
 
 import truth
 from hdsim.identification.outcome import assess
-from hdsim.io.data_checks import DriveScale, examine, local_cubic_weights, noise_level
+from hdsim.io.data_checks import DriveScale, examine
 from hdsim.io.measurement import make_measurement, save_measurement
 from hdsim.model.catalog import load_unit
+from hdsim.signals import local_cubic_weights, noise_level
 
 DRIVE = DriveScale.of(load_unit("CSG-25-100"))
 
@@ -148,7 +149,9 @@ def _diagnosis(added=(), success=False, n_eff=500.0, ambiguous=(), first="harden
      "found", "a second rate"),
 ])
 def test_outcomes_are_honest(diagnosis, data, outcome, says):
-    got, next_measurement = assess(diagnosis, data)
+    from hdsim.identification.workflow import test_kind
+
+    got, next_measurement = assess(diagnosis, data, test_kind(diagnosis["test"]))
     assert got == outcome
     assert says in next_measurement
 
@@ -156,7 +159,7 @@ def test_outcomes_are_honest(diagnosis, data, outcome, says):
 def test_loading_direction_survives_a_torque_from_motor_current():
     """A triangular torque cycle with 10 % noise (torque from current): the direction is the
     leg's, at nearly every sample (the sign of dT/dt of the raw torque is a coin toss)."""
-    from hdsim.io.data_checks import loading_direction
+    from hdsim.signals import loading_direction
 
     t = np.linspace(0.0, 8.0, 4000)
     clean = 80.0 * (2.0 * np.abs((t / 4.0 + 0.25) % 1.0 - 0.5) * 2.0 - 1.0)  # ±80 N·m, 4 s period

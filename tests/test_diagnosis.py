@@ -101,7 +101,9 @@ def test_a_residual_at_its_noise_floor_asks_more_of_the_next_family():
     # must not pass where only a little structure is left)
     from types import SimpleNamespace
 
-    from hdsim.identification.selection import FLOOR_HOLDOUT_GAIN, HOLDOUT_GAIN, holdout_gain_needed
+    from hdsim.identification.selection import TWIST_THRESHOLDS, holdout_gain_needed
+
+    FLOOR_HOLDOUT_GAIN, HOLDOUT_GAIN = TWIST_THRESHOLDS.floor_holdout_gain, TWIST_THRESHOLDS.holdout_gain
 
     rng = np.random.default_rng(5)
     t = np.linspace(0.0, 20.0, 4000)
@@ -115,8 +117,7 @@ def test_a_residual_at_its_noise_floor_asks_more_of_the_next_family():
 
 
 def _step(*ranked, reshaped=None):
-    from hdsim.identification.diagnosis import Step
-    from hdsim.identification.selection import Candidate
+    from hdsim.identification.engine import Candidate, Step
 
     step = Step(effects=[], fit=None, fold_fits=[],
                 candidates=[Candidate.failed(f, f, "") for f, _ in ranked], reshaped=reshaped)
@@ -129,10 +130,10 @@ def test_the_ranking_is_the_first_round_not_settled_by_a_change_of_form():
     """A round that changed a family's form scored its candidates against a baseline the
     diagnosis replaced; the ranking is the next round's. Without a change it is round 1;
     a change and then a white residual (no candidates) leaves round 1's."""
-    from hdsim.identification.diagnosis import Diagnosis
+    from hdsim.identification.engine import Diagnosis
 
     def ranking(*steps):
-        d = Diagnosis(measurement=None, steps=list(steps), added=[], ambiguous=[], reshaped=[], fold_rule="",
+        d = Diagnosis(kind=None, measurement=None, steps=list(steps), added=[], ambiguous=[], reshaped=[], fold_rule="",
                       whiteness={}, findings_before=[], findings_after=[], seconds=0.0, passes=0)
         return d.ranking_round, [c.family for c in d.ranking]
 
@@ -155,28 +156,6 @@ def test_a_one_rate_loss_that_stands_in_for_nothing_is_taken_out_again():
     assert [(sorted(a["families"]), a["added"], "provisional" in a) for a in d.ambiguous] == [
         (["damping", "friction"], False, False)]
     assert all(s.provisional is None for s in d.steps)
-
-
-def test_a_loss_left_beside_its_partner_at_one_rate_is_the_pairs_question():
-    """Nothing passes, and the best-scored candidate is damping with friction in the model:
-    with evidence (score below the threshold) and both hold-out folds better, the pair is
-    the question left; without either, or with the partner absent, or another family
-    best, there is none."""
-    from hdsim.identification.selection import Candidate, rate_question_left
-
-    def cand(family, score, folds=(0.05, 0.03)):
-        c = Candidate.failed(family, family, "")
-        c.score, c.holdout_gain = score, list(folds)
-        return c
-
-    friction_in = {"friction": "dahl", "hardening": "tanh"}
-    assert rate_question_left([cand("damping", -96.0), cand("backlash", 4.0)], friction_in) == ["damping", "friction"]
-    assert rate_question_left([cand("friction", -40.0)], {"damping": "kelvin_voigt"}) == ["damping", "friction"]
-    assert rate_question_left([cand("damping", -96.0)], {"hardening": "tanh"}) is None        # no partner
-    assert rate_question_left([cand("damping", -3.0)], friction_in) is None                   # no evidence
-    assert rate_question_left([cand("damping", -96.0, (0.07, -0.02))], friction_in) is None  # one fold worse
-    assert rate_question_left([cand("backlash", -50.0), cand("damping", -40.0)], friction_in) is None
-    assert rate_question_left([], friction_in) is None
 
 
 def test_hidden_hardening_is_found_and_the_error_falls():

@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from hdsim.errors import InputError
-from hdsim.model.catalog import catalog_entry, load_unit, unit_names
+from hdsim.model.catalog import load_unit
+from hdsim.model.datasheet import catalog_entry, unit_names
 from hdsim.scenarios.run import read_run, run_scenario
 from hdsim.scenarios.scenario import load_scenario
 from hdsim.units import arcmin_to_rad, rad_to_arcmin

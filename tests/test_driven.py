@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from hdsim.scenarios import ke_metrics
-from hdsim.model.catalog import catalog_entry, load_unit
+from hdsim.model.catalog import load_unit
+from hdsim.model.datasheet import catalog_entry
 from hdsim.physics.stiffness import three_segment_twist
 from hdsim.scenarios.driven import SETUP, bench_from_scenario
 from hdsim.scenarios.profile_csv import read_profile_csv

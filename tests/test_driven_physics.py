@@ -17,7 +17,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hdsim.model.catalog import catalog_entry, load_unit, unit_names
+from hdsim.model.catalog import load_unit
+from hdsim.model.datasheet import catalog_entry, unit_names
 from hdsim.physics.stiffness import three_segment_twist
 from hdsim.scenarios.driven import bench_from_scenario
 from hdsim.scenarios.driven_metrics import frequency_response_check

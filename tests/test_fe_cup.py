@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 from hdsim.errors import InputError
-from hdsim.model.catalog import load_unit, unit_names
+from hdsim.model.catalog import load_unit
+from hdsim.model.datasheet import unit_names
 from hdsim.model.fe_check import closed_form_cup, corner_shapes, cup_section
 from hdsim.physics import fe_cup
 

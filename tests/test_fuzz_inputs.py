@@ -47,7 +47,8 @@ from hdsim.errors import InputError
 from hdsim.identification.fit import load_fitted
 from hdsim.io.measurement import load_measurement, parse_column_map
 from hdsim.model import effects as fx
-from hdsim.model.catalog import load_unit, unit_names
+from hdsim.model.catalog import load_unit
+from hdsim.model.datasheet import unit_names
 from hdsim.model.input_friction import for_unit
 from hdsim.scenarios.driven import bench_from_scenario
 from hdsim.scenarios.profile_csv import read_profile_csv

@@ -247,5 +247,6 @@ def test_a_small_loss_left_beside_a_friction_at_one_rate_is_reported_with_its_pa
                        {"hardening": "piecewise", "backlash": "hard_gap"}, "one_rate", 71)
     assert d.added == ["friction"]
     assert [(a["families"], a["added"], a["round"]) for a in d.ambiguous] == [(["damping", "friction"], False, 2)]
-    outcome, measurement = assess(d.to_json(), {"reversals": 8, "loading_rates": 1, "rows": len(d.measurement)})
+    outcome, measurement = assess(d.to_json(), {"reversals": 8, "loading_rates": 1, "rows": len(d.measurement)},
+                                  d.kind)
     assert outcome == "improved" and "second loading rate" in measurement

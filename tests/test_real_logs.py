@@ -161,3 +161,33 @@ def test_the_answer_does_not_depend_on_the_unit_named(record):
     small, large = (fit(meas, ["friction", "hardening"], unit=u) for u in ("CSG-14-100", "CSG-32-100"))
     for name, value in small.internal.items():
         assert large.internal[name] == pytest.approx(value, rel=1e-3), name
+
+
+def test_the_whole_workflow_from_python_is_what_the_command_prints(record, tmp_path, cli):
+    """Contracts §6 from Python on a log with a current-derived torque and the output in
+    revolutions: the import options as keywords, then `hdsim.diagnose` with the outcome,
+    the checks, the next measurement, the JSON of ``--json`` and the report page."""
+    import hdsim
+
+    path = _write(tmp_path / "drive.csv", ["t", "iq_A", "pos_rev"],
+                  [record["time_s"], _current(record["torque_Nm"], 0.05), record["angle_rad"] / (2 * math.pi)])
+    columns = {"time_s": "t", "torque_Nm": f"{K_T}*iq_A", "angle_rev": "pos_rev"}
+    meas = hdsim.load_measurement(path, columns=columns, test="stiffness")
+    result = hdsim.diagnose(meas, effects="friction")
+    assert result.outcome in ("found", "improved", "nothing_missing", "cannot_decide")
+    assert "hardening" in result.added and result.ranking[0].family == "hardening"
+    assert {c["check"] for c in result.checks} >= {"torque_noise", "plausibility"} or any(
+        c["check"] == "stiffness" for c in result.checks)
+    assert isinstance(result.next_measurement, str)
+    page = result.report(tmp_path / "report")
+    assert page.name == "index.html" and page.exists()
+    j = result.to_json()
+    assert j["outcome"] == result.outcome and j["checks"] == result.checks and j["report"] == str(page)
+    code, printed, err = _run(cli, tmp_path, "diagnose", path, "--test", "stiffness", "--columns",
+                              MAP.format(k=K_T), "--effects", "friction", "--json")
+    assert code == 0
+    for key in ("test", "outcome", "next_measurement", "added", "ambiguous", "checks", "data"):
+        assert printed[key] == j[key], key
+    assert [c["family"] for c in printed["ranking"]] == [c["family"] for c in j["ranking"]]
+    assert printed["final"]["effects"] == j["final"]["effects"]
+    assert printed["final"]["rmse_rad"] == pytest.approx(j["final"]["rmse_rad"], rel=1e-9)

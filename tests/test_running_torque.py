@@ -255,7 +255,9 @@ def test_halves_too_short_to_fit_add_nothing_unvalidated():
     empty = np.zeros(rec.speed.size, dtype=bool)
     folds = ([empty, empty], [empty, empty])  # nothing to fit a half on
     assert rd._holdout_rss(rec, [], folds) is None
-    step = rd.RunningStep([], fit_running(rec, []), None)
+    from hdsim.identification.engine import Step
+
+    step = Step([], fit_running(rec, []), None)
     cand = rd._try(rec, step, "friction", folds, at_floor=False)
     assert not cand.accepted and "too short" in cand.reason
 

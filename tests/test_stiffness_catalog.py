@@ -5,7 +5,7 @@ Two kinds of checks live here, named so:
 - *closed forms*: a simulated number against a hand calculation from the unit's
   parameters (elastic span 2A/K1, backlash b, micro-slip 2·s_max, the three-segment law);
 - *calibration consistency*: K1–K3 fitted to a simulated loop against the catalog values
-  the unit was calibrated from (`hdsim.model.catalog.calibrate`). These cannot discover
+  the unit was calibrated from (`hdsim.model.datasheet.calibrate`). These cannot discover
   a wrong catalog; they show that calibration, hardening law, simulator and the K-fit
   metric agree with each other.
 
@@ -16,7 +16,8 @@ The default unit's runs are shared (``tests/conftest.py``); the other units run 
 import numpy as np
 import pytest
 
-from hdsim.model.catalog import catalog_entry, default_unit, load_unit, unit_names
+from hdsim.model.catalog import load_unit
+from hdsim.model.datasheet import catalog_entry, default_unit, unit_names
 from hdsim.physics.stiffness import (fit_three_segment, smooth_three_segment_torque, three_segment_torque,
                                      three_segment_twist)
 from hdsim.scenarios.run import run_scenario

@@ -139,7 +139,7 @@ def run_case(group: str, seed: int, max_rows: int | None = None) -> dict:
         else:
             report = diagnose(meas, list(truth["baseline"]))
             j = report.to_json()
-            outcome, nxt = assess(j, data)
+            outcome, nxt = assess(j, data, report.kind)
             row.update(added=list(j["added"]), reshaped=[f"{r['family']}={r['to']}" for r in j["reshaped"]],
                        ranking=[r["family"] for r in j["ranking"]],
                        scores=[r.get("score") for r in j["ranking"]],

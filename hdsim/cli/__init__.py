@@ -27,7 +27,7 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
         description="Harmonic drive simulator: stiffness, lost motion, kinematic error, "
         "Sobol sensitivity and model-vs-measurement diagnosis.",
     )
-    from hdsim import __version__
+    from hdsim._version import __version__
 
     parser.add_argument("--version", action="version", version=f"hdsim {__version__}")
     parser.add_argument("--debug", action="store_true",

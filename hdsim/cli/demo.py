@@ -7,7 +7,8 @@ import time
 from pathlib import Path
 
 from hdsim.cli import _common, emit_json
-from hdsim.model.catalog import catalog_entry, default_unit, load_unit
+from hdsim.model.catalog import load_unit
+from hdsim.model.datasheet import catalog_entry, default_unit
 from hdsim.scenarios.run import run_scenario
 from hdsim.scenarios.scenario import load_scenario
 from hdsim.units import rad_to_arcmin

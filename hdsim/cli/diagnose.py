@@ -39,48 +39,30 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    from hdsim.cli.fit import examine_inputs, load_inputs, say_checks
-    from hdsim.identification.diagnosis import diagnose
-    from hdsim.identification.outcome import assess, plausibility
+    from hdsim.cli.fit import load_inputs, say_checks
     from hdsim.errors import InputError
+    from hdsim.identification.workflow import diagnose
 
     if args.max_rounds is not None and args.max_rounds < 0:
         raise InputError("--max-rounds must be 0 or more")
     meas, effects = load_inputs(args)
-    checks, data, wrong, scale = examine_inputs(meas, args)
-    if wrong:  # not the test it claims: say what it looks like, fit nothing
-        return _emit(args, {"test": meas.test, "outcome": "wrong_test", "checks": checks, "data": data,
-                            "next_measurement": "", "baseline": None, "ranking": [], "added": [],
-                            "final": None, "ambiguous": [], "verdict": f"not a {meas.test} test: {wrong}"})
+    if args.report:
+        from hdsim.atomic import check_writable_folder
+
+        check_writable_folder(args.report)  # before the work, not after it
 
     def log(message):
         print(f"hdsim diagnose: {message}", file=sys.stderr, flush=True)
 
-    if meas.test != "running_torque" and importlib.util.find_spec("numba") is None:
+    from hdsim.identification.test_kinds import test_kind
+
+    if test_kind(meas.test).compiled_fits and importlib.util.find_spec("numba") is None:
         log("numba is not installed: the fits run in numpy, about 4x slower on a long record (pip install 'hdsim[fast]')")
     result = diagnose(meas, effects, unit=args.unit, max_rounds=args.max_rounds, log=log)
-    summary = result.to_json()
-    if meas.test == "running_torque":
-        from hdsim.identification.running_diagnosis import running_limits
-        from hdsim.identification.running_fit import running_plausibility
-
-        summary["outcome"], summary["next_measurement"] = assess(summary, data, limits=running_limits)
-        summary["checks"] = checks + running_plausibility(result.final.fit, scale)
-    else:
-        summary["outcome"], summary["next_measurement"] = assess(summary, data)
-        summary["checks"] = checks + plausibility(result.final.fit.summary(), scale)
-    summary["data"] = data
-    say_checks("diagnose", summary["checks"])
     if args.report:
-        if meas.test == "running_torque":
-            from hdsim.identification.running_report import write_running_report
-
-            page = write_running_report(result, args.report, summary, scale.running_torque or None)
-        else:
-            from hdsim.identification.report import write_report
-
-            page = write_report(result, args.report, summary)
-        summary["report"] = str(page)
+        result.report(args.report)
+    summary = result.to_json()
+    say_checks("diagnose", summary["checks"])
     return _emit(args, summary)
 
 
@@ -92,13 +74,18 @@ def _emit(args, summary) -> int:
         return 0
     if summary["outcome"] == "wrong_test":
         print(f"outcome: wrong_test: {summary['verdict']}")
+        if "report" in summary:
+            print(f"report: {summary['report']}")
         return 0
     _print(summary)
     return 0
 
 
 def _print(s) -> None:
-    key, unit = ("rmse_Nm", "N·m") if s["test"] == "running_torque" else ("rmse_rad", "rad")
+    from hdsim.identification.test_kinds import test_kind
+
+    kind = test_kind(s["test"])
+    key, unit = kind.error_key, kind.error_unit
     print(f"{s['test']} test: baseline {', '.join(s['baseline']['effects']) or '(base model)'}, "
           f"rms {s['baseline'][key]:.3g} {unit}")
     settled = s.get("ranking_round", 1)

@@ -40,39 +40,29 @@ def register(subparsers) -> None:
 
 def load_inputs(args):
     """(measurement, effects) with every input checked before anything runs."""
-    from hdsim.model.catalog import load_unit
-    from hdsim.identification.fit import parse_effects
     from hdsim.cli._import_arguments import import_options
-    from hdsim.io.measurement import load_measurement, parse_column_map
-
     from hdsim.errors import InputError
-    from hdsim.model.running_terms import parse_running_effects
+    from hdsim.identification import workflow  # noqa: F401  (registers the built-in test kinds)
+    from hdsim.identification.test_kinds import test_kind, test_kinds
+    from hdsim.io.measurement import load_measurement, parse_column_map
+    from hdsim.model.catalog import load_unit
 
     columns = parse_column_map(args.columns) if args.columns else None
-    try:  # a misspelt family: one line, exit 2, before reading anything big
-        parse_effects(args.effects)
-    except InputError as error:
-        try:  # ... unless it names a running-torque family (ripple), which only the file can confirm
-            parse_running_effects(args.effects)
-        except InputError:
-            raise error from None
+    # a misspelt family: one line, exit 2, before reading anything big (which kind's family
+    # it must be only the file says, so any kind's will do here)
+    errors = []
+    for kind in test_kinds().values():
+        try:
+            kind.parse_effects(args.effects)
+            break
+        except InputError as error:
+            errors.append(error)
+    else:
+        raise errors[-1]
     options = import_options(args)
     load_unit(args.unit)  # unknown unit: one line, exit 2, before reading anything big
     meas = load_measurement(args.data, columns, **vars(options))
-    if meas.test == "running_torque":  # its own families (friction, damping, ripple)
-        return meas, parse_running_effects(args.effects)
-    return meas, parse_effects(args.effects)
-
-
-def examine_inputs(meas, args):
-    """(checks as JSON objects, data summary, wrong-test sentence, the drive's
-    `hdsim.io.data_checks.DriveScale`) of a record against the named drive."""
-    from hdsim.io.data_checks import DriveScale, examine
-    from hdsim.model.catalog import load_unit
-
-    scale = DriveScale.of(load_unit(args.unit))
-    checks, data, wrong = examine(meas, scale)
-    return [c.to_json() for c in checks], data, wrong, scale
+    return meas, test_kind(meas.test).parse_effects(args.effects)
 
 
 def say_checks(verb: str, checks) -> None:
@@ -97,27 +87,28 @@ def _emitted(args, summary: dict, checks: list, data: dict) -> bool:
 
 
 def run(args) -> int:
-    from hdsim.identification.fit import fit
-    from hdsim.identification.outcome import plausibility
-    from hdsim.identification.residuals import findings, whiteness
-
     from hdsim.errors import InputError
+    from hdsim.identification.test_kinds import test_kind
+    from hdsim.identification.workflow import examine_record, fit
 
     meas, effects = load_inputs(args)
-    checks, data, wrong, scale = examine_inputs(meas, args)
+    checks, data, wrong, scale = examine_record(meas, args.unit)
     if wrong:
         raise InputError(f"{meas.source}: this is not a {meas.test} test: {wrong}")
-    if meas.test == "running_torque":
-        return _run_running(args, meas, effects, checks, data, scale)
-    result = fit(meas, effects, unit=args.unit)
+    kind = test_kind(meas.test)
     out = Path(args.out) if args.out else Path(Path(args.data).name).with_suffix(".fit.toml")
+    result = fit(meas, effects, unit=args.unit)
     result.save(out)
-    summary = result.summary()
+    summary = kind.fit_summary(result, out.with_suffix(""), scale)
     summary["parameters_file"] = str(out)
-    summary["whiteness"] = whiteness(result.residual)
-    summary["findings"] = findings(meas, result.residual)
-    if _emitted(args, summary, checks + plausibility(summary, scale), data):
+    if _emitted(args, summary, checks + kind.plausibility(result, scale), data):
         return 0
+    _PRINTERS[kind.error_key](meas, result, summary)
+    sys.stdout.flush()
+    return 0
+
+
+def _print_twist(meas, result, summary) -> None:
     print(f"{meas.source}: {meas.test} test, {len(meas)} rows, effects "
           f"{', '.join(result.families) or '(base model)'}")
     print(f"  rms error {summary['rmse_rad']:.3g} rad, max {summary['max_abs_error_rad']:.3g} rad, "
@@ -128,27 +119,12 @@ def run(args) -> int:
         print(f"  {name:<28} {value:.6g} ± {result.uncertainty.get(name, float('nan')):.2g}")
     for line in summary["findings"]:
         print(f"  - {line}")
-    print(f"  fitted parameter set: {out}")
-    sys.stdout.flush()
-    return 0
+    print(f"  fitted parameter set: {summary['parameters_file']}")
 
 
-def _run_running(args, meas, effects, checks, data, scale) -> int:
-    """``hdsim fit`` on a running-torque test: the law, its two figures and the fit file."""
-    from hdsim.identification.running_fit import fit_running, running_plausibility
-    from hdsim.identification.running_report import fit_figures
-
-    result = fit_running(meas, effects)
-    out = Path(args.out) if args.out else Path(Path(args.data).name).with_suffix(".fit.toml")
-    result.save(out)
-    figures = fit_figures(result, out.with_suffix(""), scale.running_torque or None)
-    summary = result.summary()
-    summary["parameters_file"] = str(out)
-    summary["figures"] = [str(f) for f in figures]
-    if _emitted(args, summary, checks + running_plausibility(result, scale), data):
-        return 0
+def _print_torque(meas, result, summary) -> None:
     m = summary["metrics"]
-    print(f"{meas.source}: running_torque test, {len(meas)} rows, torque on the {meas.torque_side}, effects "
+    print(f"{meas.source}: {meas.test} test, {len(meas)} rows, torque on the {meas.torque_side}, effects "
           f"{', '.join(result.families) or '(base: one Coulomb level)'}")
     print(f"  rms error {summary['rmse_Nm']:.3g} N·m (noise floor {summary['noise_floor_Nm']:.3g} N·m)")
     levels = {k: "not run" if v is None else f"{v:.4g} N·m" for k, v in m.items()}
@@ -156,6 +132,8 @@ def _run_running(args, meas, effects, checks, data, scale) -> int:
           f"{levels['running_torque_reverse_Nm']}")
     for name, value in summary["law"].items():
         print(f"  {name:<24} {value}")
-    print(f"  fitted law: {out}; figures: {', '.join(summary['figures'])}")
-    sys.stdout.flush()
-    return 0
+    print(f"  fitted law: {summary['parameters_file']}; figures: {', '.join(summary['figures'])}")
+
+
+#: console formats by the error a test kind fits (an angle, or a torque)
+_PRINTERS = {"rmse_rad": _print_twist, "rmse_Nm": _print_torque}

@@ -96,12 +96,16 @@ def run(args) -> int:
 
 
 def _resolve(args, models):
-    """(func, problem, output, model description, analytic indices or None)."""
-    from hdsim.sensitivity.problem import parse_assignments, parse_range
+    """(func, problem, output, model description, analytic indices or None).
+
+    The options' text is parsed here, into the typed values the library takes (bounds as
+    ``(low, high)``); the library's messages then name the options as this command does.
+    """
+    from hdsim.sensitivity.problem import parse_assignments, parse_bounds_options, parse_range
 
     names = [s.strip() for s in args.params.split(",") if s.strip()]
     frac = parse_range(args.range_) if args.range_ else None
-    bounds = parse_assignments(args.bounds, "--bounds")
+    bounds = parse_bounds_options(args.bounds)
     dists = parse_assignments(args.dist, "--dist")
     if args.function:
         if names or bounds or dists or frac is not None:
@@ -121,7 +125,8 @@ def _resolve(args, models):
 def _drive(text: str):
     """A built-in unit name as it is; a fitted-model file or a drive file as the
     `HarmonicDrive` it describes."""
-    from hdsim.model.catalog import load_unit, unit_names
+    from hdsim.model.catalog import load_unit
+    from hdsim.model.datasheet import unit_names
 
     if text in unit_names():
         return text

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from hdsim.model.catalog import catalog_entry, default_unit, unit_names
+from hdsim.model.datasheet import catalog_entry, default_unit, unit_names
 
 
 def register(subparsers) -> None:

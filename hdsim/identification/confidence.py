@@ -39,7 +39,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from hdsim.identification.folds import blocks
-from hdsim.identification.selection import RATE_PAIR, explains_as_well, holdout_gain_needed, rule
+from hdsim.identification.policy import Thresholds, explains_as_well
+from hdsim.identification.selection import holdout_gain_needed, rule
 
 __all__ = ["BlockSums", "block_labels", "block_sums", "resample_counts", "comparison_table", "RESAMPLES",
            "diagnosis_confidence"]
@@ -117,8 +118,11 @@ def comparison_table(names, holdout_residuals, labels: np.ndarray) -> list[dict]
     return rows
 
 
-def diagnosis_confidence(meas, steps: list, masks: list, one_rate: bool) -> dict:
-    """Inclusion probabilities and comparison tables by round (`hdsim.identification.confidence`)."""
+def diagnosis_confidence(meas, steps: list, masks: list, one_rate: bool, thresholds: Thresholds,
+                         rate_partner=lambda family: "") -> dict:
+    """Inclusion probabilities and comparison tables by round (`hdsim.identification.confidence`),
+    with the acceptance rule of ``thresholds`` and the rate pairs of ``rate_partner``
+    (family -> the family one loading rate cannot tell it from)."""
     starts, block_rule = blocks(meas)
     n = len(meas)
     labels = block_labels(n, starts)
@@ -150,7 +154,8 @@ def diagnosis_confidence(meas, steps: list, masks: list, one_rate: bool) -> dict
             fold_min = np.minimum(*(1.0 - np.sqrt(ratio(cs.holdout_by_fold[i], base.holdout_by_fold[i]))
                                     for i in (0, 1)))
             parts = rule(score, fold_min, 1.0 - np.sqrt(ratio(cs.holdout, base.holdout)),
-                         1.0 - np.sqrt(ratio(cs.fit, base.fit)), holdout_gain_needed(step.fit))
+                         1.0 - np.sqrt(ratio(cs.fit, base.fit)), holdout_gain_needed(step.fit, thresholds),
+                         thresholds)
             scores.append(score)
             ok.append(parts[0] & parts[1] & parts[2])
         if counts is not None:
@@ -160,15 +165,15 @@ def diagnosis_confidence(meas, steps: list, masks: list, one_rate: bool) -> dict
             if one_rate:  # the same stop as the procedure's when one rate cannot separate the pair
                 fams = [c.family for c in cands]
                 for i, c in enumerate(cands):
-                    if c.family not in RATE_PAIR:
+                    other = rate_partner(c.family)
+                    if not other:
                         continue
-                    other = next(iter(RATE_PAIR - {c.family}))
                     mine = chosen & (best == i)
                     if other in step.effects:
                         chosen &= ~mine
                     elif other in fams:
                         j = fams.index(other)
-                        chosen &= ~(mine & explains_as_well(S[i], np.array(scores)[j]))
+                        chosen &= ~(mine & explains_as_well(S[i], np.array(scores)[j], thresholds))
             for i, c in enumerate(cands):
                 probabilities[c.family] = float(np.mean(chosen & (best == i)))
             probabilities["none"] = float(1.0 - np.mean(chosen))

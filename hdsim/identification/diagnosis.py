@@ -50,18 +50,23 @@ Procedure
    of the first round not settled by a change of form (`Diagnosis.ranking_round`).
 6. *Ambiguity*: when the runner-up also passes and its score is within
    ``max(10, 10 %)`` of the best, the pair is reported with the measurement that would
-   separate them (`SEPARATING`); the better one is still added. At one loading rate,
+   separate them (the family classes' ``separated_by``); the better one is still added. At one loading rate,
    damping and friction are not told apart by a guess: when one is best and the other
    is in the model, or explains the residual within max(20, 25 %) of it, neither is
-   added and the pair is reported (`hdsim.identification.selection.rate_ambiguity`). The
+   added and the pair is reported (`hdsim.identification.policy.rate_ambiguity`). The
    pair is reported too when nothing passes but one of it, beside its partner, explains
-   part of what is left (`hdsim.identification.selection.rate_question_left`).
+   part of what is left (`hdsim.identification.policy.rate_question_left`).
 7. *How sure*: block-bootstrap inclusion probabilities and a ``loo_compare``-style table
    per round (`hdsim.identification.confidence`).
 
 Whiteness of the final residual (`hdsim.identification.residuals.whiteness`) decides the verdict:
 a residual that is neither white nor at the noise floor means the model still misses
 something (a form the library lacks, or an effect outside it) and no success is claimed.
+
+Steps 4 to 6 are `hdsim.identification.policy.decide_round`, a pure function of the
+scored candidates; the loop that applies it is `hdsim.identification.engine`, shared by
+every test kind. This module is the twist tests' part of it: the stiffness and the
+kinematic-error test kinds and their session (how a candidate is fitted and scored).
 
 The acceptance rule is tuned on the battery ``validation/diagnosis_battery.py`` (truth
 data from ``tests/truth.py``, forms unlike the library's; the slow tests of
@@ -72,215 +77,43 @@ zoo (``validation/zoo_battery.py``): its rates are in the tutorial
 
 from __future__ import annotations
 
-import time
-from dataclasses import dataclass, field
+from typing import ClassVar
 
 from hdsim.errors import InputError, SolverError
-from hdsim.identification.fit import (Evaluator, FitResult, build_model, fit_many, make_problem,
-                                      parse_effects, result_of)
-from hdsim.identification.problem import other_starts
-from hdsim.model import effects as fx
-from hdsim.io.measurement import Measurement
-from hdsim.model.drive import SLOTS
+from hdsim.identification import running_diagnosis  # noqa: F401  (registers the running-torque kind)
 from hdsim.identification.confidence import diagnosis_confidence
+from hdsim.identification.engine import Candidate, Diagnosis, Step
+from hdsim.identification.fit import Evaluator, build_model, fit, fit_many, make_problem, parse_effects, result_of
 from hdsim.identification.folds import folds, one_loading_rate
-from hdsim.identification.selection import (HOLDOUT_GAIN, MIN_GAIN, SCORE_THRESHOLD, SEPARATING, Candidate,
-                                            near_tie, rate_ambiguity, rate_question_left,
-                                            score_candidate, separating)
+from hdsim.identification.outcome import plausibility, twist_limits
+from hdsim.identification.problem import other_starts
 from hdsim.identification.residuals import findings, whiteness
+from hdsim.identification.selection import TWIST_THRESHOLDS, score_candidate
+from hdsim.identification.test_kinds import TestKind, register_test_kind, test_kind
+from hdsim.io.data_checks import run_checks
+from hdsim.io.measurement import Measurement
+from hdsim.model import effects as fx
+from hdsim.model.drive import SLOTS
 
-__all__ = ["Diagnosis", "diagnose", "folds", "SEPARATING", "SCORE_THRESHOLD",
-           "HOLDOUT_GAIN", "MIN_GAIN"]
+__all__ = ["Diagnosis", "Step", "diagnose", "folds", "TwistTest", "TwistSession", "MAX_ITERATIONS"]
 
 #: iterations of every fit of a diagnosis at most. A round's lockstep takes as many passes
 #: as its slowest fit, and stopping the slow ones early errs towards not adding (the score
-#: only falls with iterations). 15 was the cap while a pass cost 0.3-0.9 s. The compiled
-#: evaluator made passes cheap, and at 15 a fold fit can stop far from its optimum and
-#: sink a candidate's hold-out gain: in the battery, a hidden backlash at 4.4 % against
-#: 5 %, passing at 20 % with 25 iterations (validation/README.md §4)
+#: only falls with iterations); validation/README.md §4 has the measurements behind 25
 MAX_ITERATIONS = 25
-
-#: families a test can show (the stiffness test locks the wave generator: no kinematic error)
-FAMILIES_BY_TEST = {
-    "stiffness": ("hardening", "backlash", "friction", "damping"),
-    "kinematic_error": ("kinematic_error", "hardening", "backlash", "friction", "damping"),
-    "running_torque": ("friction", "damping", "ripple"),
-}
-
-
-# --------------------------------------------------------------------------- results
-
-
-@dataclass
-class Step:
-    """The model after a round: its fit, and what was tried to improve on it."""
-
-    effects: list
-    fit: FitResult
-    fold_fits: list
-    candidates: list = field(default_factory=list)
-    added: str | None = None
-    #: the families of the model tried in their other forms (the proxy guard)
-    reshapes: list = field(default_factory=list)
-    #: ``{"family", "from", "to", "score", "instead_of", "round"}`` when a form changed instead
-    reshaped: dict | None = None
-    #: the family of a damping/friction pair one loading rate cannot separate, put in the
-    #: model (not added) so that the other families are tried against a model with the loss
-    provisional: str | None = None
-
-
-@dataclass
-class Diagnosis:
-    """Result of `diagnose`; `to_json` gives the object ``hdsim diagnose --json`` prints (docs/cli.md)."""
-
-    measurement: Measurement
-    steps: list
-    added: list
-    ambiguous: list
-    reshaped: list
-    fold_rule: str
-    whiteness: dict
-    findings_before: list
-    findings_after: list
-    seconds: float
-    passes: int
-    confidence: dict = field(default_factory=dict)
-
-    @property
-    def baseline(self) -> Step:
-        return self.steps[0]
-
-    @property
-    def final(self) -> Step:
-        return self.steps[-1]
-
-    @property
-    def ranking_round(self) -> int:
-        """The round (1-based) whose candidates are `ranking`: the first round settled by an
-        addition, a one-rate stand-in or a stop, not by a change of form.
-
-        A round settled by a change of form (the proxy guard) found that the residual was
-        the shape of a family already in the model (friction named by the user, fitted as
-        Dahl where the record holds series micro-slip): its candidates were scored against
-        a baseline the diagnosis then replaced, and their order says which family imitates
-        that shape best, not which is missing. The ranking a reader acts on is the first
-        one scored against the baseline in the forms the diagnosis kept; the superseded
-        rounds stay in ``rounds`` and ``reshaped``.
-        """
-        for k, step in enumerate(self.steps):
-            if step.candidates and step.reshaped is None:
-                return k + 1
-        return 1
-
-    @property
-    def ranking(self) -> list:
-        """The candidates of `ranking_round`, best score first."""
-        return sorted(self.steps[self.ranking_round - 1].candidates, key=lambda c: c.score)
-
-    @property
-    def success(self) -> bool:
-        """True only when the final residual is explained (white or at the noise floor)."""
-        return bool(self.whiteness["explained"])
-
-    def table(self) -> list[dict]:
-        """Before/after table: one row per step (effects, rms, max error, score)."""
-        rows = []
-        for i, step in enumerate(self.steps):
-            cand = prev = None
-            if i > 0:
-                prev = self.steps[i - 1]
-                if prev.reshaped is not None:
-                    cand = next(c for c in prev.reshapes if c.family == prev.reshaped["family"]
-                                and c.effect == prev.reshaped["to"])
-                else:
-                    cand = next(c for c in prev.candidates if c.family in (prev.added, prev.provisional))
-            rows.append({"step": i, "effects": list(step.effects),
-                         "added": None if prev is None else prev.added,
-                         "provisional": None if prev is None else prev.provisional,
-                         "other_form": None if prev is None or prev.reshaped is None
-                         else {prev.reshaped["family"]: prev.reshaped["to"]},
-                         "rmse_rad": step.fit.rmse_rad, "max_abs_error_rad": step.fit.max_abs_rad,
-                         "score": None if cand is None else cand.score,
-                         "holdout_rmse_rad": [float(f.rmse(~f.rows)) for f in step.fold_fits]})
-        return rows
-
-    def verdict(self) -> str:
-        w = self.whiteness
-        if w["explained"]:
-            return (f"explained: the residual is at the noise level "
-                    f"(rms {w['rms_over_noise']:.2f}× the noise floor)")
-        return (f"residual not white (Ljung-Box p = {w['p_value']:.2g}, rms "
-                f"{w['rms_over_noise']:.1f}× the noise floor): the model still misses an effect "
-                f"that no family in the library explains, or explains only in part; "
-                f"this is not a success")
-
-    def to_json(self) -> dict:
-        base, final = self.baseline, self.final
-        return {
-            "test": self.measurement.test,
-            "baseline": {"effects": list(base.effects), "rmse_rad": base.fit.rmse_rad,
-                         "max_abs_error_rad": base.fit.max_abs_rad},
-            "ranking": [c.to_json() for c in self.ranking],
-            "ranking_round": self.ranking_round,
-            "added": list(self.added),
-            "final": {"effects": list(final.effects), "rmse_rad": final.fit.rmse_rad,
-                      "max_abs_error_rad": final.fit.max_abs_rad,
-                      "effect_ids": dict(final.fit.effects),
-                      "params": {k: float(v) for k, v in final.fit.params.items()},
-                      "uncertainty": {k: float(v) for k, v in final.fit.uncertainty.items()},
-                      "offset_rad": final.fit.offset},
-            "ambiguous": list(self.ambiguous),
-            "reshaped": list(self.reshaped),
-            "rounds": [{"effects": list(s.effects), "rmse_rad": s.fit.rmse_rad,
-                        "candidates": [c.to_json() for c in sorted(s.candidates, key=lambda c: c.score)],
-                        "other_forms": [c.to_json() for c in sorted(s.reshapes, key=lambda c: c.score)],
-                        "added": s.added, "reshaped": s.reshaped, "provisional": s.provisional}
-                       for s in self.steps],
-            "table": self.table(),
-            "holdout": self.fold_rule,
-            "whiteness": dict(self.whiteness),
-            "success": self.success,
-            "verdict": self.verdict(),
-            "findings": {"baseline": self.findings_before, "final": self.findings_after},
-            "confidence": self.confidence,
-            "seconds": round(self.seconds, 3),
-            "passes": self.passes,
-        }
-
-
-# --------------------------------------------------------------------------- procedure
-
-
-def _slots(model, meas, ev, masks, all_starts: list, fold_starts: list, label: str) -> list[list]:
-    """The fits of one model: all rows and each fold, one problem per start (the effects'
-    `other_starts` added to every slot); the lowest cost of a slot counts (`_best`)."""
-    alts = other_starts(model, meas)
-    slots = [[make_problem(model, meas, ev, start=s, label=f"{label}:all") for s in all_starts + alts]]
-    for i, mask in enumerate(masks):
-        slots.append([make_problem(model, meas, ev, rows=mask, start=s, label=f"{label}:fold{i}")
-                      for s in fold_starts[i] + alts])
-    for slot in slots:
-        for p in slot:
-            p.max_iter = MAX_ITERATIONS
-    return slots
-
-
-def _best(slot: list):
-    return min(slot, key=lambda p: p.cost)
-
-
-def _results(ev, probs, unit):
-    return [result_of(ev, p, unit=unit) for p in probs]
 
 
 def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candidates: dict | None = None,
              max_rounds: int | None = None, max_steps: int | None = None, log=None) -> Diagnosis:
     """Find the effect families a measurement needs beyond ``effects``.
 
+    The engine alone: no data checks, outcome or report (`hdsim.diagnose`, in
+    `hdsim.identification.workflow`, adds them).
+
     Parameters
     ----------
     meas : Measurement
-        A stiffness, kinematic-error or running-torque test.
+        A record of any registered test kind (`hdsim.identification.test_kinds`).
     effects : str, list or dict, optional
         The baseline's families or effect ids (see `hdsim.identification.fit.parse_effects`).
     unit : str or HarmonicDrive, optional
@@ -300,231 +133,190 @@ def diagnose(meas: Measurement, effects=None, *, unit=None, families=None, candi
 
     Returns
     -------
-    Diagnosis or hdsim.identification.running_diagnosis.RunningDiagnosis
+    Diagnosis
         Every step with its fit and the candidates tried, what was added, the
-        ambiguities, the whiteness of the final residual and the findings (the latter
-        for a running-torque test, which has its own law and families).
+        ambiguities, the whiteness of the final residual and the findings.
     """
-    if meas.test == "running_torque":
-        from hdsim.identification.running_diagnosis import diagnose_running
+    return test_kind(meas.test).diagnose(meas, effects, unit=unit, families=families, candidates=candidates,
+                                         max_rounds=max_rounds, max_steps=max_steps, log=log)
 
-        return diagnose_running(meas, effects, families=families, max_rounds=max_rounds, log=log)
-    t0 = time.perf_counter()
-    chosen = effects if isinstance(effects, dict) else parse_effects(effects)
-    stand_in = {f: fx.default_effect(f) for f in SLOTS}
-    for family, effect_id in (candidates or {}).items():
-        fx.effect_class(family, effect_id)
-        stand_in[family] = effect_id
-    pool = list(families) if families is not None else list(FAMILIES_BY_TEST[meas.test])
-    for f in pool:
-        if f not in FAMILIES_BY_TEST[meas.test]:
-            raise InputError(f"a {meas.test} test cannot show the {f} family")
-    ev = Evaluator(meas, max_steps=max_steps)
-    masks, rule = folds(meas)
-    one_rate = meas.test == "stiffness" and one_loading_rate(meas)
-    passes = 0
-    say = log or (lambda *_: None)
 
-    model = build_model(unit, chosen, meas)
-    unit_name = model.name
-    slots = _slots(model, meas, ev, masks, [None], [[None], [None]], "baseline")
-    passes += fit_many(ev, [p for slot in slots for p in slot])
-    fits = _results(ev, [_best(slot) for slot in slots], unit_name)
-    current = dict(chosen)
-    step = Step(effects=[f for f in SLOTS if f in current], fit=fits[0], fold_fits=fits[1:])
-    steps = [step]
-    added, ambiguous = [], []
-    findings_before = findings(meas, step.fit.residual)
-    say(f"baseline {step.effects}: rms {step.fit.rmse_rad:.3g} rad")
-    reshaped = []  # families whose form was changed instead of adding another family
-    undecidable = set()  # the damping/friction pair once one loading rate could not separate it
-    while True:
-        round_no = len(steps)
-        todo = [f for f in pool if f not in current and f not in undecidable]
-        if not todo or (max_rounds is not None and len(added) >= max_rounds):
-            break
-        residual_test = whiteness(step.fit.residual)  # once a round: the stop and the guard read it
-        if residual_test["white"]:
-            break
-        # one lockstep for the round: every candidate on all rows and on each hold-out
-        # fold, each from the baseline's values and afresh. A pass costs about the same
-        # whatever it holds (the evaluator's cost is its loop over the samples), so the
-        # fold fits ride along instead of waiting for the all-rows optimum
-        trials = [(family, form, {**current, family: form}) for family in todo
-                  for form in _entry_forms(family, stand_in[family])]
-        scored, n = _lockstep(trials, unit, meas, ev, masks, step, unit_name)
-        scored = _best_form_per_family(scored)
-        passes += n
-        step.candidates = scored
-        ranked = sorted(scored, key=lambda c: c.score)
-        say(f"round {round_no}: " + ", ".join(f"{c.family} {c.score:.1f}" for c in ranked))
-        # the best score among the candidates that pass: a better score whose hold-out
-        # predictions fail is an over-fit, and it should not hide a runner-up that passes
-        # (the block bootstrap of `diagnosis_confidence` applies the rule the same way)
-        passing = [c for c in ranked if c.accepted]
-        best = passing[0] if passing else None  # None: nothing to add, unless a form changes
-        # the proxy guard: the families already in the model in their other forms. When
-        # one explains the residual clearly better than the best candidate, the residual
-        # is that family's shape, not a missing family (`Effect.other_forms`). When no
-        # candidate passes against the user's baseline and its residual is not explained,
-        # the form of a family the user named may be what hides the missing one (Preisach
-        # friction fitted as Dahl leaves a residual against which a hard gap lowers the
-        # error by 3 %): a form that passes is taken and the candidates are tried again
-        # against it. Only while nothing has been added and no form changed (the user's
-        # baseline, with a one-rate loss standing in if there is one): the user names
-        # families, not forms, and every later round's families have had their forms
-        # tried in the round that added one (in every round that stops, it would cost the
-        # 20,000-row bench 5 s more)
-        forms = _other_forms(current, {r["family"] for r in reshaped})
-        on_baseline = not added and not reshaped and not residual_test["explained"]
-        if forms and (best is not None or on_baseline):
-            step.reshapes, n = _lockstep(forms, unit, meas, ev, masks, step, unit_name)
-            passes += n
-            say(f"round {round_no}, other forms: " + ", ".join(f"{c.family}={c.effect} {c.score:.1f}"
-                                                                for c in step.reshapes))
-            ordered = sorted(step.reshapes, key=lambda c: c.score)
-            if best is None:  # nothing to add: the best form that passes is taken, if any
-                form = next((c for c in ordered if c.accepted), None)
-                changes = form is not None
-            elif ordered[0].accepted and near_tie(best.score, ordered[0].score):
-                # too close to call: the family is added (a new effect is the more useful
-                # lead for the bench), the other form named with the separating measurement
-                form, changes = ordered[0], False
-                ambiguous.append(_tie_entry(best, form, round_no, other_form={form.family: form.effect}))
-            else:
-                form = ordered[0]
-                changes = form.accepted and form.score < best.score
-            if changes:
-                step.reshaped = {"family": form.family, "from": current[form.family], "to": form.effect,
-                                 "score": form.score, "instead_of": best.family if best else None,
-                                 "round": round_no}
-                reshaped.append(step.reshaped)
-                step = _advance(steps, current, form)
+# --------------------------------------------------------------------------- the twist tests
+
+
+class TwistTest(TestKind):
+    """A test whose error is the output angle [rad] against the model's (stiffness, kinematic error)."""
+
+    thresholds = TWIST_THRESHOLDS
+    compiled_fits = True
+    #: a record at one loading rate leaves the rate pair's question open (a locked test's
+    #: loop; a driven test's rate is the speed, and damping shows without reversals)
+    asks_rate: ClassVar[bool] = False
+    #: a locked loop shows friction and backlash only over torque reversals
+    needs_reversals: ClassVar[bool] = True
+    #: the families in the order they are tried
+    family_order: ClassVar[tuple[str, ...]] = ()
+
+    def families(self):
+        return {f: fx.FAMILY_BASES[f] for f in self.family_order}
+
+    def ordered(self, current):
+        return [f for f in SLOTS if f in current]
+
+    def parse_effects(self, effects):
+        return effects if isinstance(effects, dict) else parse_effects(effects)
+
+    def fit(self, meas, effects=None, *, unit=None):
+        return fit(meas, effects, unit=unit)
+
+    def fit_summary(self, result, stem, scale) -> dict:
+        summary = result.summary()
+        summary["whiteness"] = whiteness(result.residual)
+        summary["findings"] = findings(result.measurement, result.residual)
+        return summary
+
+    def session(self, meas, chosen, *, unit=None, candidates=None, max_steps=None):
+        return TwistSession(self, meas, chosen, unit=unit, candidates=candidates, max_steps=max_steps)
+
+    def fit_errors(self, fit_result) -> dict:
+        return {"rmse_rad": fit_result.rmse_rad, "max_abs_error_rad": fit_result.max_abs_rad}
+
+    def fit_json(self, fit_result) -> dict:
+        return {"effect_ids": dict(fit_result.effects),
+                "params": {k: float(v) for k, v in fit_result.params.items()},
+                "uncertainty": {k: float(v) for k, v in fit_result.uncertainty.items()},
+                "offset_rad": fit_result.offset}
+
+    def step_figures(self, step) -> dict:
+        return {"holdout_rmse_rad": [float(f.rmse(~f.rows)) for f in step.fold_fits]}
+
+    def checks(self, meas, scale):
+        return run_checks(meas, scale)
+
+    def plausibility(self, fit_result, scale):
+        return plausibility(fit_result.summary(), scale)
+
+    def limits(self, diagnosis_json, data, ranking):
+        return twist_limits(self, diagnosis_json, data, ranking)
+
+    def unexplained(self) -> str:
+        return ("the residual keeps a structure that no family of the library explains on this record: look at "
+                "the residual against time and torque in the report, and record the test at a second amplitude "
+                "and loading rate")
+
+    def write_report(self, diagnosis, directory, summary, scale):
+        from hdsim.identification.report import write_report
+
+        return write_report(diagnosis, directory, summary)
+
+
+class StiffnessTest(TwistTest):
+    """The torsional stiffness / hysteresis test: wave generator locked, circular spline fixed."""
+
+    name = "stiffness"
+    asks_rate = True
+    family_order = ("hardening", "backlash", "friction", "damping")
+
+
+class KinematicErrorTest(TwistTest):
+    """Kinematic error with the wave generator driven (the output angle against the ideal)."""
+
+    name = "kinematic_error"
+    needs_reversals = False
+    family_order = ("kinematic_error", "hardening", "backlash", "friction", "damping")
+
+
+register_test_kind(StiffnessTest())
+register_test_kind(KinematicErrorTest())
+
+
+class TwistSession:
+    """A twist test's fits for one record: all rows and two hold-out folds per model, in
+    lockstep (`hdsim.identification.fit.fit_many`)."""
+
+    def __init__(self, kind: TwistTest, meas: Measurement, chosen: dict, *, unit=None, candidates=None,
+                 max_steps=None):
+        self.kind, self.measurement, self.chosen, self.unit = kind, meas, dict(chosen), unit
+        self.stand_in = {f: fx.default_effect(f) for f in SLOTS}
+        for family, effect_id in (candidates or {}).items():
+            fx.effect_class(family, effect_id)
+            self.stand_in[family] = effect_id
+        self.evaluator = Evaluator(meas, max_steps=max_steps)
+        self.masks, self.fold_rule = folds(meas)
+        self.one_rate = kind.asks_rate and one_loading_rate(meas)
+        self.passes = 0
+        self.unit_name = None
+
+    def baseline(self) -> Step:
+        model = build_model(self.unit, self.chosen, self.measurement)
+        self.unit_name = model.name
+        slots = self._slots(model, [None], [[None], [None]], "baseline")
+        self.passes += fit_many(self.evaluator, [p for slot in slots for p in slot])
+        fits = self._results(slots)
+        return Step(effects=self.kind.ordered(self.chosen), fit=fits[0], fold_fits=fits[1:])
+
+    def entry_forms(self, family: str) -> tuple:
+        """The stand-in of ``family`` and its `Effect.entry_forms`."""
+        effect_id = self.stand_in[family]
+        return (effect_id,) + tuple(fx.effect_class(family, effect_id).entry_forms)
+
+    def other_forms(self, current: dict, done: set) -> list:
+        """Trials of the model with one family in another form (`Effect.other_forms`); a family
+        changes form once at most (``done``), so the procedure cannot swing between two forms."""
+        return [(family, other, {**current, family: other}) for family, effect_id in current.items()
+                if family not in done for other in fx.effect_class(family, effect_id).other_forms]
+
+    def try_models(self, step: Step, trials: list, residual: dict) -> list:
+        """Fit every trial ``(family, effect id, {family: effect id})`` on all rows and on each
+        fold in one lockstep, each from ``step``'s values and afresh, and score it against
+        ``step``. A trial that cannot be built or fitted is a candidate rejected with the
+        reason, never fatal."""
+        built, scored = [], []
+        for family, effect_id, structure in trials:
+            try:
+                model = build_model(self.unit, structure, self.measurement)
+                slots = self._slots(model, [dict(step.fit.internal), None],
+                                    [[dict(f.internal), None] for f in step.fold_fits], family)
+            except (InputError, SolverError) as exc:
+                scored.append(Candidate.failed(family, effect_id, str(exc)))
                 continue
-        if best is None:
-            # a loss that explains part of what is left, beside its partner, but too little
-            # to be added: at one rate that is the pair's question, not "nothing more"
-            pair = rate_question_left(ranked, current) if one_rate else None
-            if pair is not None:
-                ambiguous.append(_pair_entry(pair, scored, round_no))
-            break
-        pair = rate_ambiguity(best, scored, current) if one_rate else None
-        if pair is not None:
-            # one loading rate cannot say whether this loss grows with the rate: report
-            # the pair and the measurement that separates it, add neither
-            ambiguous.append(_pair_entry(pair, scored, round_no))
-            if set(pair) & set(current):
-                break  # the question is whether the loss in the model grows with the rate
-            # a loss is missing and only its rate law is undecidable: it stands in the model,
-            # not added, while the families that do not hinge on the rate are tried (a gap
-            # behind a one-rate friction is invisible until the loss is in: score +0.5)
-            step.provisional = best.family
-            undecidable |= set(pair)
-            step = _advance(steps, current, best)
-            continue
-        if len(passing) > 1 and near_tie(best.score, passing[1].score):
-            ambiguous.append(_tie_entry(best, passing[1], round_no))
-        step.added = best.family
-        added.append(best.family)
-        step = _advance(steps, current, best)
-        # the next round runs unless the residual is white, as after the baseline: a
-        # residual near the noise floor may still hold a second family's structure (a
-        # smooth gap beside a hardening leaves 1.2x the noise), and the candidates'
-        # own tests (score, hold-out gain) keep noise-level structure from being added
-    held = next((k for k, s in enumerate(steps) if s.provisional is not None), None)
-    if held is not None and not any(s.added for s in steps[held:]):
-        # nothing was added once the loss stood in: the record said no more than the pair,
-        # and the model stays the one before it (a form changed against the stand-in goes too)
-        del steps[held + 1:]
-        steps[held].provisional = None
-        reshaped = [r for r in reshaped if r["round"] <= held]
-        ambiguous = [a for a in ambiguous if a["round"] <= held + 1]
-        step = steps[held]
-    elif held is not None:  # the stand-in stays: its pair's entry names it
-        pair_entry = next(a for a in ambiguous if a["round"] == held + 1 and a["added"] is False)
-        pair_entry["provisional"] = steps[held].provisional
-    w = whiteness(step.fit.residual)
-    return Diagnosis(measurement=meas, steps=steps, added=added, ambiguous=ambiguous, reshaped=reshaped,
-                     fold_rule=rule,
-                     whiteness=w, findings_before=findings_before,
-                     findings_after=findings(meas, step.fit.residual),
-                     seconds=time.perf_counter() - t0, passes=passes,
-                     confidence=diagnosis_confidence(meas, steps, masks, one_rate))
+            built.append((family, effect_id, slots))
+        if built:
+            self.passes += fit_many(self.evaluator, [p for _, _, slots in built for slot in slots for p in slot])
+        for family, effect_id, slots in built:
+            try:
+                res = self._results(slots)
+            except (InputError, SolverError) as exc:
+                scored.append(Candidate.failed(family, effect_id, str(exc)))
+                continue
+            scored.append(score_candidate(family, effect_id, res, step, self.kind.thresholds))
+        return scored
 
+    def explained(self, step: Step) -> dict:
+        if "whiteness" not in step.memo:
+            step.memo["whiteness"] = whiteness(step.fit.residual)
+        return step.memo["whiteness"]
 
-def _lockstep(trials: list, unit, meas, ev, masks, step: Step, unit_name: str) -> tuple[list, int]:
-    """Fit every trial ``(family, effect id, {family: effect id})`` on all rows and on each
-    fold in one lockstep and score it against ``step``; returns the candidates and the passes.
+    def confidence(self, steps: list) -> dict:
+        return diagnosis_confidence(self.measurement, steps, self.masks, self.one_rate, self.kind.thresholds,
+                                    self.kind.rate_partner)
 
-    A trial that cannot be built or fitted is a candidate rejected with the reason, never fatal.
-    """
-    built, scored = [], []
-    for family, effect_id, structure in trials:
-        try:
-            model = build_model(unit, structure, meas)
-            slots = _slots(model, meas, ev, masks, [dict(step.fit.internal), None],
-                           [[dict(f.internal), None] for f in step.fold_fits], family)
-        except (InputError, SolverError) as exc:
-            scored.append(Candidate.failed(family, effect_id, str(exc)))
-            continue
-        built.append((family, effect_id, slots))
-    passes = fit_many(ev, [p for _, _, slots in built for slot in slots for p in slot]) if built else 0
-    for family, effect_id, slots in built:
-        try:
-            res = _results(ev, [_best(slot) for slot in slots], unit_name)
-        except (InputError, SolverError) as exc:
-            scored.append(Candidate.failed(family, effect_id, str(exc)))
-            continue
-        scored.append(score_candidate(family, effect_id, res, step))
-    return scored, passes
+    def findings(self, step: Step) -> list:
+        return findings(self.measurement, step.fit.residual)
 
+    def _slots(self, model, all_starts: list, fold_starts: list, label: str) -> list[list]:
+        """The fits of one model: all rows and each fold, one problem per start (the effects'
+        `other_starts` added to every slot); the lowest cost of a slot counts."""
+        meas, ev = self.measurement, self.evaluator
+        alts = other_starts(model, meas)
+        slots = [[make_problem(model, meas, ev, start=s, label=f"{label}:all") for s in all_starts + alts]]
+        for i, mask in enumerate(self.masks):
+            slots.append([make_problem(model, meas, ev, rows=mask, start=s, label=f"{label}:fold{i}")
+                          for s in fold_starts[i] + alts])
+        for slot in slots:
+            for p in slot:
+                p.max_iter = MAX_ITERATIONS
+        return slots
 
-def _entry_forms(family: str, effect_id: str) -> tuple:
-    """The forms a family is tried in when it enters: its stand-in and the stand-in's
-    `Effect.entry_forms`."""
-    return (effect_id,) + tuple(fx.effect_class(family, effect_id).entry_forms)
-
-
-def _best_form_per_family(scored: list) -> list:
-    """One candidate per family: the best-scoring form among those that pass, else the
-    best-scoring form (the rule that picks the round's addition, applied within a family)."""
-    best = {}
-    for c in scored:
-        held = best.get(c.family)
-        if held is None or (c.accepted, -c.score) > (held.accepted, -held.score):
-            best[c.family] = c
-    return list(best.values())
-
-
-def _other_forms(current: dict, done: set) -> list:
-    """Trials of the model with one family in another form (`Effect.other_forms`); a family
-    changes form once at most (``done``), so the procedure cannot swing between two forms."""
-    trials = []
-    for family, effect_id in current.items():
-        if family in done:
-            continue
-        for other in fx.effect_class(family, effect_id).other_forms:
-            trials.append((family, other, {**current, family: other}))
-    return trials
-
-
-def _advance(steps: list, current: dict, chosen: Candidate) -> Step:
-    """Make ``chosen``'s model the current one: its family and effect enter ``current``,
-    its fits a new step."""
-    current[chosen.family] = chosen.effect
-    step = Step(effects=[f for f in SLOTS if f in current], fit=chosen.fit, fold_fits=chosen.fold_fits)
-    steps.append(step)
-    return step
-
-
-def _tie_entry(best: Candidate, rival: Candidate, round_no: int, **extra) -> dict:
-    """The ``ambiguous`` entry of a near-tie in which ``best`` is added."""
-    return {"families": [best.family, rival.family], "scores": [best.score, rival.score], "round": round_no,
-            "measurement": separating(best.family, rival.family), "added": True, **extra}
-
-
-def _pair_entry(pair: list, scored: list, round_no: int) -> dict:
-    """The ambiguous entry of the damping/friction pair one loading rate cannot separate."""
-    by_family = {c.family: c.score for c in scored}
-    return {"families": pair, "scores": [by_family.get(f) for f in pair], "round": round_no,
-            "measurement": separating(*pair), "added": False}
+    def _results(self, slots: list) -> list:
+        return [result_of(self.evaluator, min(slot, key=lambda p: p.cost), unit=self.unit_name) for slot in slots]

@@ -24,7 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from hdsim.errors import InputError, SolverError, unknown_name
-from hdsim.identification.optimizer import FittedRows, bic, effective_n, fit_many, residuals, uncertainty
+from hdsim.identification.optimizer import (FittedRows, bic, check_nested, effective_n, fit_many, residuals,
+                                           uncertainty)
 from hdsim.identification.problem import K0_NAME, Evaluator, FitProblem, make_problem, other_starts
 from hdsim.io.measurement import Measurement
 from hdsim.model import effects as fx
@@ -34,7 +35,7 @@ from hdsim.model.drive import SLOTS, HarmonicDrive
 RESULT_NEWTON_ITERATIONS = 400
 
 __all__ = ["FitResult", "fit", "parse_effects", "build_model", "load_fitted", "result_of",
-           "Evaluator", "FitProblem", "make_problem", "fit_many", "bic", "effective_n"]
+           "Evaluator", "FitProblem", "make_problem", "fit_many", "bic", "effective_n", "check_nested"]
 
 
 # --------------------------------------------------------------------------- effects
@@ -164,6 +165,11 @@ class FitResult(FittedRows):
     @property
     def families(self) -> list[str]:
         return [f for f in SLOTS if f in self.effects]
+
+    @property
+    def drive(self) -> HarmonicDrive:
+        """The fitted drive, which `hdsim.run_scenario` and `hdsim.sobol` take as it is."""
+        return self.model
 
     def rmse(self, rows=None) -> float:
         r = self.residual if rows is None else self.residual[rows]
@@ -308,6 +314,8 @@ def result_of(ev: Evaluator, prob: FitProblem, unit: str = "") -> FitResult:
         raise SolverError(f"the model {', '.join(prob.names) or 'structure'} cannot be evaluated on "
                           f"this record: {prob.message or 'the torque balance has no solution'}")
     r_rows, full, coef = residuals(ev, prob, twist)
+    if prob.nested is not None and prob.nested.r is not None:  # the optimiser never ends above it
+        check_nested(float(r_rows[0] @ r_rows[0]), prob.nested.cost, prob.label or ", ".join(prob.names))
     coef = coef[0]
     offset = float(coef[0])
     linear = {}
@@ -357,14 +365,9 @@ def fit(meas: Measurement, effects=None, *, unit=None, rows=None, start: dict | 
 
     Returns
     -------
-    FitResult or hdsim.identification.running_fit.RunningFit
-        The latter for a running-torque test (its own law and families).
+    FitResult
+        A twist test's fit (`hdsim.fit` fits a record of any test kind).
     """
-    if meas.test == "running_torque":
-        from hdsim.identification.running_fit import fit_running
-        from hdsim.model.running_terms import parse_running_effects
-
-        return fit_running(meas, parse_running_effects(effects), rows=rows)
     chosen = effects if isinstance(effects, dict) else parse_effects(effects)
     model = build_model(unit, chosen, meas)
     ev = Evaluator(meas, max_steps=max_steps)

@@ -12,8 +12,8 @@ import math
 
 import numpy as np
 
-from hdsim.io.data_checks import loading_rates, turning_points
 from hdsim.io.measurement import Measurement
+from hdsim.signals import loading_rates, turning_points
 
 __all__ = ["folds", "one_loading_rate", "blocks", "MIN_BLOCKS"]
 
@@ -26,7 +26,7 @@ def _legs(meas: Measurement):
 
     The folds keep their own rule, a moving average over n/200 samples and a dead band of
     5 % of the swing: the battery's hold-out rates were measured with it (the noise-set
-    band of `hdsim.io.data_checks.torque_legs` moved one backlash case of five).
+    band of `hdsim.signals.torque_legs` moved one backlash case of five).
     """
     T = np.asarray(meas.torque, dtype=float)
     k = max(int(T.size // 200), 1)

@@ -26,7 +26,8 @@ import numpy as np
 
 from hdsim.identification.problem import Evaluator, FitProblem
 
-__all__ = ["fit_many", "residuals", "bic", "lag1", "effective_n", "uncertainty", "FittedRows"]
+__all__ = ["fit_many", "residuals", "bic", "lag1", "effective_n", "uncertainty", "FittedRows", "check_nested",
+           "NESTING_TOLERANCE"]
 
 
 def _on_rows(prob: FitProblem, a: np.ndarray) -> np.ndarray:
@@ -66,9 +67,11 @@ def fit_many(ev: Evaluator, problems: list[FitProblem], *, tol: float = 1e-3, lo
             k = p.u.size
             steps = p.fd_steps()
             trials = np.zeros((0, k))
-            if p.J is None:  # first tick: the start and its Jacobian
+            if p.J is None:  # first tick: the start and its Jacobian (and the nested start)
                 U = np.vstack([p.u[None, :], p.u[None, :] + np.diag(steps)]) if k else p.u[None, :]
                 kind = "start"
+                if _takes_nested(p, kind):
+                    U = np.vstack([U, p.nested.u[None, :]])
             else:  # Jacobian at the current point and trial steps from the previous one
                 trials = _trial_points(p)
                 U = np.vstack([p.u[None, :] + np.diag(steps), trials])
@@ -83,11 +86,40 @@ def fit_many(ev: Evaluator, problems: list[FitProblem], *, tol: float = 1e-3, lo
             block = twist[row:row + size]
             row += size
             r_rows = row_residuals(ev, p, block)
+            if _takes_nested(p, kind):
+                _hold_nested(p, r_rows[-1], block[-1])
+                r_rows, block = r_rows[:-1], block[:-1]
             _update(p, r_rows, kind == "start", steps, trials, tol, block)
+            if p.done:
+                _keep_nested(p)
         pending = [p for p in pending if not p.done]
         if log:
             log(f"pass {ticks}: {len(pending)} fits still running")
     return ticks
+
+
+def _takes_nested(p: FitProblem, kind: str) -> bool:
+    """True on the first pass of a fit with a nested start not yet evaluated."""
+    return kind == "start" and p.nested is not None and p.nested.r is None
+
+
+def _hold_nested(p: FitProblem, r: np.ndarray, twist: np.ndarray) -> None:
+    """Keep the nested start's residual on the problem's rows, its cost and its twist."""
+    cost = float(r @ r)
+    p.nested.r, p.nested.twist = r, twist
+    p.nested.cost = cost if np.isfinite(cost) else np.inf
+
+
+def _keep_nested(p: FitProblem) -> None:
+    """Go back to the nested start when the finished fit ended above it (or failed).
+
+    Its Jacobian is evaluated on one more pass (the uncertainties need it), after which
+    the fit is done (`_update`)."""
+    nest = p.nested
+    if nest is None or nest.kept or nest.r is None or not np.isfinite(nest.cost) or p.cost <= nest.cost:
+        return
+    p.u, p.r, p.cost, p.twist_at_u = nest.u.copy(), nest.r, nest.cost, nest.twist
+    p.J, p.done, nest.kept = None, False, True
 
 
 def _trial_points(p: FitProblem) -> np.ndarray:
@@ -123,6 +155,9 @@ def _update(p: FitProblem, r_rows: np.ndarray, has_base: int, steps, trials, tol
         p.J = np.where(np.isfinite(p.J), p.J, 0.0)
         if k == 0:
             p.done, p.message = True, "nothing to fit: the linear part is solved exactly"
+        elif p.nested is not None and p.nested.kept:
+            p.done, p.message = True, (f"converged: kept the fitted model it contains ({', '.join(p.nested.families)} "
+                                       "neutral); the fit from its start ended above it")
         return
     Jcols = r_rows[:k]
     trial_r = r_rows[k:]
@@ -159,6 +194,27 @@ def _update(p: FitProblem, r_rows: np.ndarray, has_base: int, steps, trials, tol
         p.done, p.message = True, "converged: no step lowers the cost (a minimum)"
     elif p.iterations >= p.max_iter:
         p.done, p.message = True, f"not converged: stopped at the iteration limit ({p.max_iter})"
+
+
+#: a fit may end above the model it contains by this share of that model's cost at most
+#: (the evaluator's round-off; a larger excess is a defect of the fit, not a result)
+NESTING_TOLERANCE = 1e-6
+
+
+def check_nested(candidate_cost: float, baseline_cost: float, label: str = "") -> None:
+    """Raise `RuntimeError` (an internal error) when a fit ends worse than a model it contains.
+
+    Parameters
+    ----------
+    candidate_cost, baseline_cost : float
+        RSS of the larger model and of the model it contains, on the same rows [rad² or N²·m²].
+    label : str
+        What was fitted, for the message.
+    """
+    if not candidate_cost <= baseline_cost * (1.0 + NESTING_TOLERANCE) + 1e-300:
+        raise RuntimeError(f"internal error: the fit of {label or 'a model'} ended at RSS {candidate_cost:.9g}, "
+                           f"above the {baseline_cost:.9g} of the model it contains (by "
+                           f"{candidate_cost / baseline_cost - 1.0:.3g} relative; at most {NESTING_TOLERANCE:g})")
 
 
 class FittedRows:

@@ -23,24 +23,19 @@ from __future__ import annotations
 #: ln(n_eff) penalty and the hold-out folds need a few dozen)
 MIN_EFFECTIVE_SAMPLES = 30
 
-#: families whose question is about the loading rate
-RATE_FAMILIES = ("damping",)
-
-
-def assess(diagnosis_json: dict, data: dict, limits=None) -> tuple[str, str]:
+def assess(diagnosis_json: dict, data: dict, kind) -> tuple[str, str]:
     """(outcome, next_measurement) of a diagnosis.
 
     Parameters
     ----------
     diagnosis_json : dict
-        `hdsim.identification.diagnosis.Diagnosis.to_json` of the diagnosis.
+        `hdsim.identification.engine.Diagnosis.to_json` of the diagnosis.
     data : dict
         The data summary of `hdsim.io.data_checks.examine` (``reversals``,
         ``loading_rates``, ``rows``).
-    limits : callable, optional
-        ``limits(diagnosis_json, data, ranking)`` -> what kept the record from deciding, as
-        measurements (default: the twist tests'; a running-torque test brings its own,
-        `hdsim.identification.running_diagnosis.running_limits`).
+    kind : hdsim.identification.test_kinds.TestKind
+        The record's test kind: what keeps its records from deciding (`TestKind.limits`)
+        and what to record when no family explains the residual (`TestKind.unexplained`).
 
     Returns
     -------
@@ -51,7 +46,7 @@ def assess(diagnosis_json: dict, data: dict, limits=None) -> tuple[str, str]:
     explained = bool(diagnosis_json["success"])
     added = diagnosis_json["added"]
     ranking = [c for c in diagnosis_json["ranking"] if c.get("score") is not None]
-    reasons = (limits or _limits)(diagnosis_json, data, ranking)
+    reasons = kind.limits(diagnosis_json, data, ranking)
     # a loss one loading rate could not name (a pair reported, neither of it added) still
     # asks for its measurement, and nothing can be "missing nothing" while it is open
     open_pairs = [a["measurement"] for a in diagnosis_json.get("ambiguous", []) if a.get("added") is False]
@@ -63,17 +58,12 @@ def assess(diagnosis_json: dict, data: dict, limits=None) -> tuple[str, str]:
         return ("cannot_decide", open_pairs[0]) if open_pairs else ("nothing_missing", "")
     if reasons:
         return "cannot_decide", reasons[0]
-    if diagnosis_json.get("test") == "running_torque":
-        return "cannot_decide", ("the residual keeps a structure that no running-torque family explains: look at "
-                                 "the residual against time and wave-generator angle in the report (a motor's "
-                                 "cogging, a temperature drift, a load that changes)")
-    return "cannot_decide", ("the residual keeps a structure that no family of the library explains on this "
-                             "record: look at the residual against time and torque in the report, and record "
-                             "the test at a second amplitude and loading rate")
+    return "cannot_decide", kind.unexplained()
 
 
-def _limits(diagnosis_json: dict, data: dict, ranking: list) -> list[str]:
-    """What kept this record from deciding, each as the measurement that would, most pressing first."""
+def twist_limits(kind, diagnosis_json: dict, data: dict, ranking: list) -> list[str]:
+    """What kept a twist test's record from deciding, each as the measurement that would,
+    most pressing first."""
     out = []
     rows = int(data.get("rows", 0))
     # the samples of the round where the diagnosis stopped: a candidate of an earlier round
@@ -86,22 +76,15 @@ def _limits(diagnosis_json: dict, data: dict, ranking: list) -> list[str]:
         out.append(f"more independent samples: the residual is correlated over many rows (about {n_eff:.0f} "
                    f"independent samples of {rows}); record more cycles, or the same cycle more slowly "
                    "with less filtering")
-    if _reversals(diagnosis_json, data) < 2:
+    if kind.needs_reversals and int(data.get("reversals", 2)) < 2:
         out.append("a full torque cycle and back (0 → +T → −T → 0): without reversals the loop that "
                    "friction, hysteresis and backlash leave cannot be seen")
     for pair in diagnosis_json.get("ambiguous", []):
         out.append(pair["measurement"])
-    if data.get("loading_rates", 2) < 2 and ranking and ranking[0]["family"] in RATE_FAMILIES:
+    if data.get("loading_rates", 2) < 2 and ranking and kind.rate_dependent(ranking[0]["family"]):
         out.append("the same torque cycle at a second loading rate (4× faster or slower): with one rate, "
                    "rate-dependent losses cannot be told from friction")
     return out
-
-
-def _reversals(diagnosis_json: dict, data: dict) -> int:
-    """Torque reversals of a locked test (a kinematic-error test needs none: many by convention)."""
-    if diagnosis_json.get("test") == "kinematic_error":
-        return 2
-    return int(data.get("reversals", 2))
 
 
 #: a fitted stiffness this far from the datasheet's K1 … K3 (either way) is named

@@ -30,14 +30,15 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from hdsim.io.data_checks import loading_direction
 from hdsim.errors import InputError
 from hdsim.io.measurement import Measurement
 from hdsim.model.drive import SLOTS, Calibration, HarmonicDrive, compliance_chain
 from hdsim.model.effects import FitContext
+from hdsim.signals import loading_direction
 from hdsim.simulation.quasistatic import locked_twist, stackable_groups
 
-__all__ = ["K0_NAME", "Evaluator", "FitProblem", "fit_context", "make_problem", "split_stiffness"]
+__all__ = ["K0_NAME", "Evaluator", "FitProblem", "NestedStart", "fit_context", "make_problem", "nested_start",
+           "split_stiffness"]
 
 #: the base model's free parameter: the low-load stiffness K0 [N·m/rad] (internal)
 K0_NAME = "stiffness.K0"
@@ -180,6 +181,10 @@ def split_stiffness(model: HarmonicDrive, K0, ratio=1.0, e_cap: float = E_INF_CA
 
 # --------------------------------------------------------------------------- transforms
 
+#: the ends of an optimiser coordinate: e^±700 is as far as a float reaches without overflow,
+#: so a bound maps to its value within 1e-304 of the parameter's range
+U_END = 700.0
+
 
 @dataclass(frozen=True)
 class Transform:
@@ -191,23 +196,32 @@ class Transform:
     def to_phys(self, u):
         u = np.asarray(u, dtype=float)
         if math.isfinite(self.hi):
-            return self.lo + (self.hi - self.lo) / (1.0 + np.exp(-np.clip(u, -700, 700)))
-        return self.lo + np.exp(np.clip(u, -700, 700))
+            return self.lo + (self.hi - self.lo) / (1.0 + np.exp(-np.clip(u, -U_END, U_END)))
+        return self.lo + np.exp(np.clip(u, -U_END, U_END))
 
-    def to_internal(self, p):
+    def to_internal(self, p, exact: bool = False):
+        """The coordinate of ``p``. A start is kept a little inside the bounds, where the
+        optimiser can move it; ``exact`` maps a point to reproduce (a fitted optimum, a
+        neutral value on a bound) to the coordinate whose value it is, a bound to the
+        end of the coordinate (±`U_END`)."""
         p = float(p)
         span = self.hi - self.lo
         if math.isfinite(self.hi):
-            f = min(max((p - self.lo) / span, 1e-12), 1.0 - 1e-9)
+            f = (p - self.lo) / span
+            if exact:
+                return -U_END if f <= 0.0 else U_END if f >= 1.0 else math.log(f) - math.log1p(-f)
+            f = min(max(f, 1e-12), 1.0 - 1e-9)
             return math.log(f / (1.0 - f))
+        if exact and p <= self.lo:
+            return -U_END
         return math.log(max(p - self.lo, 1e-300))
 
     def dphys_du(self, u):
         u = np.asarray(u, dtype=float)
         if math.isfinite(self.hi):
-            s = 1.0 / (1.0 + np.exp(-np.clip(u, -700, 700)))
+            s = 1.0 / (1.0 + np.exp(-np.clip(u, -U_END, U_END)))
             return (self.hi - self.lo) * s * (1.0 - s)
-        return np.exp(np.clip(u, -700, 700))
+        return np.exp(np.clip(u, -U_END, U_END))
 
 
 def _k0_transform(model: HarmonicDrive) -> Transform:
@@ -292,6 +306,22 @@ class Evaluator:
 
 
 @dataclass
+class NestedStart:
+    """The start of a fit that adds families to a fitted model: that model's optimum with
+    the added families at their neutral values (`Effect.neutral_start`), whose cost is the
+    fitted model's. The optimiser evaluates it on its first pass and goes back to it if
+    the fit ends above it (`hdsim.identification.optimizer.fit_many`), so a larger model
+    is never fitted worse than the model it contains."""
+
+    u: np.ndarray  # internal coordinates
+    families: tuple  # the families at their neutral values
+    cost: float = math.nan  # RSS on the problem's rows [rad²], once evaluated
+    r: np.ndarray | None = None  # residual on the problem's rows, once evaluated
+    twist: np.ndarray | None = None  # twist (n,) at ``u``, once evaluated
+    kept: bool = False  # the fit ended above it and went back to it
+
+
+@dataclass
 class FitProblem:
     """One least-squares fit: a model structure, its free parameters and the rows it fits."""
 
@@ -315,6 +345,8 @@ class FitProblem:
     extra: dict = field(default_factory=dict)
     #: the twist (n,) at ``u``, kept from the pass that evaluated it (`result_of` reuses it)
     twist_at_u: np.ndarray | None = None
+    #: the contained fitted model's optimum, when the start is one (`make_problem`)
+    nested: NestedStart | None = None
 
     def phys(self, U: np.ndarray) -> dict[str, np.ndarray]:
         """Fitted coordinates (K0 and the effects' dotted free parameters) for rows of U."""
@@ -385,4 +417,36 @@ def make_problem(model: HarmonicDrive, meas: Measurement, ev: Evaluator, rows=No
     u = np.array([tr.to_internal(v) for tr, v in zip(transforms, values)], dtype=float)
     rows = np.ones(len(meas), dtype=bool) if rows is None else np.asarray(rows, dtype=bool)
     return FitProblem(model=model, names=names, transforms=transforms, rows=rows, u=u,
-                      basis=ev.basis(model), label=label)
+                      basis=ev.basis(model), label=label,
+                      nested=nested_start(model, context, names, transforms, values, start))
+
+
+def nested_start(model: HarmonicDrive, context: FitContext, names: list, transforms: list, values: list,
+                 start: dict) -> NestedStart | None:
+    """The start at the fitted model ``start`` holds (its ``stiffness.K0`` and its families'
+    values) with every family it lacks at its neutral values; None when ``start`` is no
+    fitted model, lacks no family, or a family it lacks declares no neutral values.
+
+    The data's start values of an added family are a guess, and the optimiser may stop
+    above the contained model's cost from there (its stopping rule, the iteration limit, a
+    local minimum); from this start it cannot.
+    """
+    if K0_NAME not in start:
+        return None
+    point = dict(zip(names, values))
+    added = []
+    for family in SLOTS:
+        effect = getattr(model, family)
+        own = [f"{family}.{fp.name}" for fp in effect.free_parameters(context)]
+        if not own or any(name in start for name in own):
+            continue
+        neutral = effect.neutral_start(context)
+        if neutral is None:
+            return None
+        point.update({f"{family}.{name}": value for name, value in neutral.items()})
+        added.append(family)
+    if not added:
+        return None
+    # exactly the fitted values: a start kept inside the bounds would not be the model's optimum
+    u = np.array([tr.to_internal(point[name], exact=True) for name, tr in zip(names, transforms)], dtype=float)
+    return NestedStart(u=u, families=tuple(added))

@@ -31,7 +31,8 @@ from pathlib import Path
 import numpy as np
 
 from hdsim.atomic import write_text_atomic
-from hdsim.io.figures import save_figure
+from hdsim.identification.report_page import (CHECK_HEAD, check_rows, html_page, html_table, md_table, new_figure,
+                                              outcome_line, save)
 from hdsim.identification.residuals import order_spectrum, views
 from hdsim.units import ARCSEC_PER_RAD
 
@@ -39,18 +40,6 @@ __all__ = ["write_report", "FIGURES"]
 
 FIGURES = ("residual_vs_time.png", "measured_vs_model.png", "residual_vs_torque.png",
            "residual_spectrum.png", "residual_vs_rate.png", "error_fall.png")
-
-
-def _figure(figsize: tuple[float, float]):
-    # matplotlib is imported on first use: reading a diagnosis does not need it.
-    from matplotlib.figure import Figure
-
-    return Figure(figsize=figsize)
-
-
-def _save(fig, path: Path) -> Path:
-    save_figure(fig, path, dpi=110, bbox_inches="tight")
-    return path
 
 
 def _label(step) -> str:
@@ -95,17 +84,17 @@ def write_report(diagnosis, folder, assessment: dict | None = None) -> Path:
     drawn = []
 
     # residual vs time: first, it shows stick-slip, drift and joins
-    fig = _figure((10, 3.5))
+    fig = new_figure((10, 3.5))
     ax = fig.subplots()
     for step in steps:
         ax.plot(t, step.fit.residual * arcsec, lw=0.6, label=_label(step))
     ax.set_xlabel("time [s]")
     ax.set_ylabel("residual [arcsec]")
     ax.legend(fontsize=8)
-    drawn.append(_save(fig, folder / FIGURES[0]))
+    drawn.append(save(fig, folder / FIGURES[0]))
 
     # measured vs model
-    fig = _figure((7, 4.5))
+    fig = new_figure((7, 4.5))
     ax = fig.subplots()
     y = _x(meas)
     ax.plot(T, (y - first.fit.offset) * arcsec, ".", ms=2, color="0.6", label="measured")
@@ -116,10 +105,10 @@ def write_report(diagnosis, folder, assessment: dict | None = None) -> Path:
     ax.set_ylabel("angle − offset [arcsec]")
     ax.set_title("measured vs model")
     ax.legend(fontsize=8)
-    drawn.append(_save(fig, folder / FIGURES[1]))
+    drawn.append(save(fig, folder / FIGURES[1]))
 
     # residual vs torque by direction
-    fig = _figure((10, 4))
+    fig = new_figure((10, 4))
     axes = fig.subplots(1, len(ends), sharey=True, squeeze=False)
     for ax, step in zip(axes[0], ends):
         v = views(meas, step.fit.residual)
@@ -131,11 +120,11 @@ def write_report(diagnosis, folder, assessment: dict | None = None) -> Path:
         ax.set_xlabel("torque [N·m]")
     axes[0][0].set_ylabel("residual [arcsec]")
     axes[0][0].legend(fontsize=8, markerscale=4)  # the colours mean the same in every panel
-    drawn.append(_save(fig, folder / FIGURES[2]))
+    drawn.append(save(fig, folder / FIGURES[2]))
 
     # spectrum
     if meas.test == "kinematic_error":
-        fig = _figure((10, 4))
+        fig = new_figure((10, 4))
         axes = fig.subplots(1, 2)
         wg = np.asarray(meas.wg_angle, dtype=float)
         for step in ends:
@@ -148,7 +137,7 @@ def write_report(diagnosis, folder, assessment: dict | None = None) -> Path:
         axes[1].set_ylabel("amplitude [arcsec]")
         axes[1].legend(fontsize=8)
     else:
-        fig = _figure((7, 4))
+        fig = new_figure((7, 4))
         ax = fig.subplots()
         dt = float(np.median(np.diff(t)))
         for step in ends:
@@ -160,12 +149,12 @@ def write_report(diagnosis, folder, assessment: dict | None = None) -> Path:
         ax.set_ylabel("residual amplitude [arcsec]")
         ax.set_title("residual spectrum (white noise is flat)")
         ax.legend(fontsize=8)
-    drawn.append(_save(fig, folder / FIGURES[3]))
+    drawn.append(save(fig, folder / FIGURES[3]))
 
     # loop width vs rate: only with two rates or more
     loops = [(step, *_loop_by_rate(views(meas, step.fit.residual))) for step in steps]
     if all(len(rates) >= 2 for _, rates, _ in loops):
-        fig = _figure((7, 4))
+        fig = new_figure((7, 4))
         ax = fig.subplots()
         for step, rates, widths in loops:
             ax.plot(rates, np.array(widths) * arcsec, "o-", label=_label(step))
@@ -173,10 +162,10 @@ def write_report(diagnosis, folder, assessment: dict | None = None) -> Path:
         ax.set_ylabel("residual loop: unloading − loading [arcsec]")
         ax.axhline(0, color="0.8", lw=0.8)
         ax.legend(fontsize=8)
-        drawn.append(_save(fig, folder / FIGURES[4]))
+        drawn.append(save(fig, folder / FIGURES[4]))
 
     # error fall
-    fig = _figure((7, 4))
+    fig = new_figure((7, 4))
     ax = fig.subplots()
     labels = [_label(s) for s in steps]
     x = np.arange(len(steps))
@@ -188,7 +177,7 @@ def write_report(diagnosis, folder, assessment: dict | None = None) -> Path:
     ax.set_ylabel("error [arcsec]")
     ax.set_yscale("log")
     ax.legend(fontsize=8)
-    drawn.append(_save(fig, folder / FIGURES[5]))
+    drawn.append(save(fig, folder / FIGURES[5]))
 
     names = [p.name for p in drawn]
     write_text_atomic(folder / "index.md", _markdown(diagnosis, assessment or {}, names))
@@ -244,7 +233,7 @@ def _rounds(diagnosis):
                 lines.append([label, c.effect, "–", "–", "–", c.reason])
                 continue
             lines.append([label, c.effect, f"{c.score:.1f}", f"{c.fit.rmse_rad * arcsec:.2f}",
-                          f"{100 * c.pooled_holdout_gain:.0f} % ("
+                          f"{100 * c.figures['pooled_holdout_gain']:.0f} % ("
                           + ", ".join(f"{100 * g:.0f} %" for g in c.holdout_gain) + ")", c.reason])
         out.append((i + 1, "+".join(step.effects) or "base", lines))
     return out
@@ -256,13 +245,6 @@ ROUND_HEAD = ["family", "effect", "score", "rms [arcsec]", "hold-out gain, poole
               "decision"]
 
 
-def _md_table(head, rows):
-    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-    lines += ["| " + " | ".join(r) + " |" for r in rows]
-    return "\n".join(lines)
-
-
-CHECK_HEAD = ("status", "check", "what the data say")
 CONFIDENCE_HEAD = ("model", "Δelpd [nats]", "SE", "P(added)")
 
 
@@ -314,35 +296,22 @@ def _confidence_intro(d: dict) -> str:
             f"resamples of the record in which the rule adds that family in that round.")
 
 
-def _outcome_line(assessment: dict) -> str:
-    """The outcome and what to record next, in words, or '' without an assessment."""
-    if not assessment.get("outcome"):
-        return ""
-    text = f"Outcome: {assessment['outcome'].replace('_', ' ')}"
-    return text + (f"; to decide, record {assessment['next_measurement']}" if assessment.get("next_measurement")
-                   else "")
-
-
-def _check_rows(assessment: dict) -> list:
-    return [(c["status"], c["check"], c["message"]) for c in assessment.get("checks", [])]
-
-
 def _markdown(diagnosis, assessment: dict, figures) -> str:
     d = diagnosis.to_json()
     parts = [f"# Diagnosis of {diagnosis.measurement.source}", ""]
-    if _outcome_line(assessment):
-        parts += [f"**{_outcome_line(assessment)}**", ""]
-    if _check_rows(assessment):
-        parts += ["## The data", "", _md_table(CHECK_HEAD, _check_rows(assessment)), ""]
+    if outcome_line(assessment):
+        parts += [f"**{outcome_line(assessment)}**", ""]
+    if check_rows(assessment):
+        parts += ["## The data", "", md_table(CHECK_HEAD, check_rows(assessment)), ""]
     parts += [f"{d['test']} test, {len(diagnosis.measurement)} rows; hold-out folds by {d['holdout']}.", "",
              f"**Verdict:** {d['verdict']}", "", "## Before and after", "",
-             _md_table(TABLE_HEAD, _rows(diagnosis)), ""]
+             md_table(TABLE_HEAD, _rows(diagnosis)), ""]
     for n, effects, lines in _rounds(diagnosis):
-        parts += [f"## Round {n} (model: {effects})", "", _md_table(ROUND_HEAD, lines), ""]
+        parts += [f"## Round {n} (model: {effects})", "", md_table(ROUND_HEAD, lines), ""]
     if _confidence_rounds(d):
         parts += ["## How sure", "", _confidence_intro(d), ""]
         for n, rows in _confidence_rounds(d):
-            parts += [f"Round {n}:", "", _md_table(CONFIDENCE_HEAD, rows), ""]
+            parts += [f"Round {n}:", "", md_table(CONFIDENCE_HEAD, rows), ""]
     if d["reshaped"]:
         parts += ["## Other forms", ""]
         parts += [f"- {_reshape_text(r)}" for r in d["reshaped"]]
@@ -362,29 +331,23 @@ def _markdown(diagnosis, assessment: dict, figures) -> str:
     return "\n".join(parts) + "\n"
 
 
-def _html_table(head, rows):
-    out = ["<table><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in head) + "</tr>"]
-    out += ["<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>" for r in rows]
-    return "\n".join(out) + "</table>"
-
-
 def _html(diagnosis, assessment: dict, figures) -> str:
     d = diagnosis.to_json()
     body = [f"<h1>Diagnosis of {html.escape(str(diagnosis.measurement.source))}</h1>"]
-    if _outcome_line(assessment):
-        body.append(f"<p><b>{html.escape(_outcome_line(assessment))}</b></p>")
-    if _check_rows(assessment):
-        body += ["<h2>The data</h2>", _html_table(CHECK_HEAD, _check_rows(assessment))]
+    if outcome_line(assessment):
+        body.append(f"<p><b>{html.escape(outcome_line(assessment))}</b></p>")
+    if check_rows(assessment):
+        body += ["<h2>The data</h2>", html_table(CHECK_HEAD, check_rows(assessment))]
     body += [f"<p>{d['test']} test, {len(diagnosis.measurement)} rows; hold-out folds by "
             f"{html.escape(d['holdout'])}.</p>",
             f"<p><b>Verdict:</b> {html.escape(d['verdict'])}</p>", "<h2>Before and after</h2>",
-            _html_table(TABLE_HEAD, _rows(diagnosis))]
+            html_table(TABLE_HEAD, _rows(diagnosis))]
     for n, effects, lines in _rounds(diagnosis):
-        body += [f"<h2>Round {n} (model: {html.escape(effects)})</h2>", _html_table(ROUND_HEAD, lines)]
+        body += [f"<h2>Round {n} (model: {html.escape(effects)})</h2>", html_table(ROUND_HEAD, lines)]
     if _confidence_rounds(d):
         body += ["<h2>How sure</h2>", f"<p>{html.escape(_confidence_intro(d))}</p>"]
         for n, rows in _confidence_rounds(d):
-            body += [f"<p>Round {n}:</p>", _html_table(CONFIDENCE_HEAD, rows)]
+            body += [f"<p>Round {n}:</p>", html_table(CONFIDENCE_HEAD, rows)]
     if d["reshaped"]:
         body.append("<h2>Other forms</h2><ul>" + "".join(
             f"<li>{html.escape(_reshape_text(r))}</li>" for r in d["reshaped"]) + "</ul>")
@@ -396,8 +359,4 @@ def _html(diagnosis, assessment: dict, figures) -> str:
                 "</ul><p>Final model:</p><ul>" +
                 "".join(f"<li>{html.escape(s)}</li>" for s in d["findings"]["final"]) + "</ul>")
     body.append("<h2>Figures</h2>" + "".join(f'<p><img src="{f}" alt="{f}"></p>' for f in figures))
-    style = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}"
-             "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px;"
-             "font-size:90%}img{max-width:100%}")
-    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>hdsim diagnosis</title>"
-            f"<style>{style}</style></head><body>{''.join(body)}</body></html>\n")
+    return html_page("hdsim diagnosis", body)

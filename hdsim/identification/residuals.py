@@ -27,7 +27,7 @@ import numpy as np
 # the χ² tail from scipy.special: scipy.stats would add 0.8 s to every `hdsim diagnose`
 from scipy.special import chdtrc
 
-from hdsim.io.data_checks import loading_direction
+from hdsim.signals import loading_direction
 from hdsim.units import ARCMIN_PER_RAD, ARCSEC_PER_RAD
 
 __all__ = ["ljung_box", "noise_floor", "whiteness", "views", "findings", "order_spectrum",

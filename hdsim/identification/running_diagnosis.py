@@ -1,189 +1,192 @@
-"""Diagnosis of a running-torque test: which families the sweep needs beyond the Coulomb level.
+"""The running-torque test kind: which families a sweep needs beyond the Coulomb level.
 
-The same loop as the twist tests (`hdsim.identification.diagnosis`): fit the base model
-and the given families, try every other family of a running-torque test
+The loop is the engine every test kind shares (`hdsim.identification.engine`): fit the
+base model and the given families, try every other family of a running-torque test
 (`hdsim.model.running_terms.RUNNING_FAMILIES`), rank them, add the best if it passes,
-refit, repeat. The error is a torque (``rmse_Nm``); the noise floor
-(``noise_floor_Nm``) is the record's own, measured without a model.
+refit, repeat. The error is a torque (``rmse_Nm``); the noise floor (``noise_floor_Nm``)
+is the record's own, measured without a model. The thresholds are `RUNNING_THRESHOLDS`.
 
 A candidate passes only if all of these hold:
 
 1. **Information criterion:** its BIC, with the residual's effective sample count,
-   improves by more than `BIC_MARGIN`, or its hold-out gain (2.) exceeds
-   `STRONG_HOLDOUT_GAIN` on both halves: a model far from the record leaves a residual
+   improves by more than ``-score``, or its hold-out gain (2.) exceeds
+   ``strong_holdout_gain`` on both halves: a model far from the record leaves a residual
    correlated over many rows, whose few effective samples make the BIC timid.
 2. **Hold-out:** fitted on the first half of every plateau (and the ramps) it predicts
-   the second half better than the model without it by `HOLDOUT_GAIN`, and the other
+   the second half better than the model without it by ``holdout_gain``, and the other
    way round. Each half holds every speed and direction, so the hold-out stays valid
    however unequal the dwell times are. When the model's rms is already within
-   `EXPLAINED_RATIO` of the record's noise floor the bar is `HOLDOUT_GAIN_AT_FLOOR`:
-   an effect under the noise must still predict unseen data clearly better.
-3. **A real share of what is missing:** it removes at least `MIN_SHARE` of the residual
+   `EXPLAINED_RATIO` of the record's noise floor the bar is ``floor_holdout_gain``: an
+   effect under the noise must still predict unseen data clearly better.
+3. **A real share of what is missing:** it removes at least ``min_share`` of the residual
    variance above the noise floor. An effect that only patches the imperfect form of
    another family removes a few per cent; a missing family removes most of it.
 4. **Not a proxy:** the families already in the model are allowed other shapes of their
    own (`hdsim.model.running_terms.RunningTerm.other_shapes`: a churning loss growing as
    √ω and ω², Stribeck curves of other shapes, higher ripple orders); on top of that
    widened model the candidate must still predict both held-out halves better by
-   `PROXY_HOLDOUT_GAIN`. A Stribeck rise that only bends a
-   viscous line into the power law of the drive's real churning is then not credited
-   as friction.
+   ``proxy_holdout_gain``. A Stribeck rise that only bends a viscous line into the power
+   law of the drive's real churning is then not credited as friction.
 
-Two candidates that pass and explain the residual within `AMBIGUOUS_SHARE` of each
-other are reported as ``ambiguous``, with the measurement that would separate them.
+Two candidates that pass and explain the residual within ``tie_share`` of each other are
+reported as ``ambiguous``, with the measurement that would separate them.
 """
 
 from __future__ import annotations
 
-import functools
 import math
-import time
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from hdsim.errors import InputError
+from hdsim.identification.engine import Candidate, Diagnosis, Step
+from hdsim.identification.policy import Thresholds
 from hdsim.identification.residuals import EXPLAINED_RATIO, whiteness
-from hdsim.identification.running_fit import RunningFit, SweepRecord, fit_running
+from hdsim.identification.running_fit import RunningFit, SweepRecord, fit_running, running_plausibility
+from hdsim.identification.test_kinds import TestKind, register_test_kind, test_kind
 from hdsim.io.measurement import Measurement
 from hdsim.model.running_terms import RUNNING_FAMILIES, parse_running_effects
 
-__all__ = ["RunningDiagnosis", "diagnose_running", "running_limits", "BIC_MARGIN", "MIN_SHARE"]
+__all__ = ["RunningTorqueTest", "RunningSession", "diagnose_running", "running_limits", "RUNNING_THRESHOLDS"]
 
-#: a family must lower the BIC by more than this
-BIC_MARGIN = 10.0
-#: … and remove at least this share of the residual variance above the noise floor
-MIN_SHARE = 0.2
-#: … and lower the held-out error on both halves by this share
-HOLDOUT_GAIN = 0.02
-#: … or by this share when the rms is already at the noise floor
-HOLDOUT_GAIN_AT_FLOOR = 0.1
-#: a held-out gain this large stands for the BIC when a record is so far from the model that its
-#: residual is correlated over many rows (few effective samples make the BIC timid)
-STRONG_HOLDOUT_GAIN = 0.1
-#: … and still predict held-out halves this much better when the families in the model may take
-#: other shapes of their own
-PROXY_HOLDOUT_GAIN = 0.05
-#: two passing candidates whose shares differ by less than this are ambiguous
-AMBIGUOUS_SHARE = 0.05
-
-#: what separates two families of a running-torque test
-SEPARATING = {
-    frozenset({"friction", "damping"}): "a sweep over at least three speeds a decade apart: viscous loss grows "
-                                        "with speed, a Stribeck rise falls with it",
-    frozenset({"friction", "ripple"}): "longer plateaus (several wave-generator revolutions each): a ripple "
-                                       "averages out over a revolution, a friction level does not",
-    frozenset({"damping", "ripple"}): "longer plateaus at several speeds: a ripple averages out over a "
-                                      "revolution, a viscous loss grows with speed",
-}
+#: the thresholds of a running-torque test: a family must lower the BIC by more than 10, or
+#: predict both held-out halves better by 10 %; predict them better by 2 % (10 % once the rms
+#: is at the noise floor); remove 20 % of the residual variance above the noise floor; still
+#: predict them 5 % better when the families in the model take other shapes; two passing
+#: candidates whose shares differ by less than 5 % are a near tie
+RUNNING_THRESHOLDS = Thresholds(score=-10.0, holdout_gain=0.02, floor_holdout_gain=0.10, strong_holdout_gain=0.10,
+                                min_share=0.2, proxy_holdout_gain=0.05, tie_share=0.05)
 
 
-@dataclass
-class RunningCandidate:
-    """One family tried in one round."""
+class RunningTorqueTest(TestKind):
+    """The running-torque (friction sweep) test: the torque to turn the drive at steady speeds."""
 
-    family: str
-    fit: RunningFit | None
-    score: float = math.inf
-    share: float = 0.0
-    holdout_gain: list = field(default_factory=list)
-    accepted: bool = False
-    reason: str = ""
+    name = "running_torque"
+    error_unit = "N·m"
+    error_key = "rmse_Nm"
+    thresholds = RUNNING_THRESHOLDS
+    stop_when_white = False
 
-    def to_json(self) -> dict:
-        effect = RUNNING_FAMILIES[self.family].id
-        if self.fit is None:
-            return {"family": self.family, "effect": effect, "rmse_Nm": None, "score": None,
-                    "passes": False, "why": self.reason}
-        return {"family": self.family, "effect": effect, "rmse_Nm": self.fit.rmse_Nm, "score": self.score,
-                "n_eff": self.fit.n_eff, "share_explained": self.share, "holdout_gain": self.holdout_gain,
-                "passes": self.accepted, "why": self.reason}
+    def families(self):
+        return {family: type(term) for family, term in RUNNING_FAMILIES.items()}
 
+    def ordered(self, current):
+        return list(current)  # the order the families entered the law
 
-@dataclass
-class RunningStep:
-    """The model after a round and what was tried on it."""
+    def keeps_entry(self, entry, kept):
+        # the same pair may come up again in a later round
+        return all(set(a["families"]) != set(entry["families"]) for a in kept)
 
-    effects: list
-    fit: RunningFit
-    folds: list
-    candidates: list = field(default_factory=list)
-    added: str | None = None
-    #: held-out RSS of this model with its families widened: the proxy test of every candidate of the
-    #: round compares with it, so it is computed once (``False``: not yet)
-    widened_folds: list | None | bool = False
+    def parse_effects(self, effects):
+        return {f: RUNNING_FAMILIES[f].id for f in parse_running_effects(effects)}
 
+    def fit(self, meas, effects=None, *, unit=None):
+        return fit_running(meas, parse_running_effects(effects))
 
-@dataclass
-class RunningDiagnosis:
-    """Result of `diagnose_running`; `to_json` is the ``hdsim diagnose --json`` object."""
+    def fit_summary(self, result, stem, scale) -> dict:
+        from hdsim.identification.running_report import fit_figures
 
-    record: SweepRecord
-    steps: list
-    added: list
-    ambiguous: list
-    seconds: float
+        summary = result.summary()
+        summary["figures"] = [str(f) for f in fit_figures(result, stem, scale.running_torque or None)]
+        return summary
 
-    @property
-    def measurement(self) -> Measurement:
-        return self.record.measurement
+    def session(self, meas, chosen, *, unit=None, candidates=None, max_steps=None):
+        return RunningSession(meas, chosen)
 
-    @property
-    def baseline(self) -> RunningStep:
-        return self.steps[0]
+    def diagnose(self, meas, effects=None, *, unit=None, families=None, candidates=None, max_rounds=None,
+                 max_steps=None, log=None):
+        if families is not None:
+            families = parse_running_effects(families)
+        return super().diagnose(meas, effects, unit=unit, families=families, max_rounds=max_rounds, log=log)
 
-    @property
-    def final(self) -> RunningStep:
-        return self.steps[-1]
+    def fit_errors(self, fit) -> dict:
+        return {"rmse_Nm": fit.rmse_Nm}
 
-    @property
-    def ranking(self) -> list:
-        return sorted(self.steps[0].candidates, key=lambda c: c.score)
+    def fit_json(self, fit) -> dict:
+        summary = fit.summary()
+        return {"fitted": summary["fitted"], "uncertainty": summary["uncertainty"], "law": summary["law"]}
 
-    @functools.cached_property
-    def whiteness(self) -> dict:
-        """Whiteness and noise-floor verdict of the final residual (read by ``success``, the verdict
-        and the JSON; computed once)."""
-        return _explained(self.final.fit)
+    def diagnosis_json(self, diagnosis) -> dict:
+        summary = diagnosis.final.fit.summary()
+        return {"metrics": summary["metrics"], "noise_floor_Nm": summary["noise_floor_Nm"]}
 
-    @property
-    def success(self) -> bool:
-        return bool(self.whiteness["explained"])
-
-    def verdict(self) -> str:
-        w = self.whiteness
+    def verdict(self, w: dict) -> str:
         if w["explained"]:
             return f"explained: the residual is at the noise level (rms {w['rms_over_noise']:.2f}× the noise floor)"
         return (f"the residual keeps structure (rms {w['rms_over_noise']:.1f}× the noise floor): the sweep holds an "
                 "effect that no running-torque family explains, or explains only in part")
 
-    def table(self) -> list[dict]:
-        return [{"step": i, "effects": list(s.effects), "added": None if i == 0 else self.steps[i - 1].added,
-                 "rmse_Nm": s.fit.rmse_Nm} for i, s in enumerate(self.steps)]
+    def checks(self, meas, scale):
+        # imported here: running_checks loads scipy.signal (about a second)
+        from hdsim.io.running_checks import running_checks
 
-    def to_json(self) -> dict:
-        base, final = self.baseline.fit, self.final.fit
-        summary = final.summary()
-        return {
-            "test": "running_torque",
-            "baseline": {"effects": list(self.baseline.effects), "rmse_Nm": base.rmse_Nm},
-            "ranking": [c.to_json() for c in self.ranking],
-            "added": list(self.added),
-            "final": {"effects": list(self.final.effects), "rmse_Nm": final.rmse_Nm,
-                      "fitted": summary["fitted"], "uncertainty": summary["uncertainty"], "law": summary["law"]},
-            "ambiguous": list(self.ambiguous),
-            "metrics": summary["metrics"],
-            "noise_floor_Nm": summary["noise_floor_Nm"],
-            "rounds": [{"effects": list(s.effects), "rmse_Nm": s.fit.rmse_Nm,
-                        "candidates": [c.to_json() for c in sorted(s.candidates, key=lambda c: c.score)],
-                        "added": s.added} for s in self.steps],
-            "table": self.table(),
-            "holdout": "first and second half of every plateau",
-            "whiteness": self.whiteness,
-            "success": self.success,
-            "verdict": self.verdict(),
-            "seconds": round(self.seconds, 3),
-        }
+        return running_checks(meas, scale)
+
+    def plausibility(self, fit, scale):
+        return running_plausibility(fit, scale)
+
+    def limits(self, diagnosis_json, data, ranking):
+        return running_limits(diagnosis_json, data, ranking)
+
+    def unexplained(self) -> str:
+        return ("the residual keeps a structure that no running-torque family explains: look at the residual "
+                "against time and wave-generator angle in the report (a motor's cogging, a temperature drift, "
+                "a load that changes)")
+
+    def write_report(self, diagnosis, directory, summary, scale):
+        from hdsim.identification.running_report import write_running_report
+
+        return write_running_report(diagnosis, directory, summary, scale.running_torque or None)
+
+
+register_test_kind(RunningTorqueTest())
+
+
+class RunningSession:
+    """A running-torque test's fits for one sweep: the law is linear in its amplitudes once
+    the non-linear parameters are fixed, so every candidate is fitted afresh
+    (`hdsim.identification.running_fit.fit_running`)."""
+
+    one_rate = False
+    fold_rule = "first and second half of every plateau"
+
+    def __init__(self, meas, chosen: dict):
+        self.record = meas if isinstance(meas, SweepRecord) else SweepRecord.of(meas)
+        self.measurement = self.record.measurement
+        self.chosen = dict(chosen)
+        self.folds = _halves(self.record)
+        self.passes = 0
+
+    def baseline(self) -> Step:
+        families = list(self.chosen)
+        return Step(families, fit_running(self.record, families), _holdout_rss(self.record, families, self.folds))
+
+    def entry_forms(self, family: str) -> tuple:
+        return (RUNNING_FAMILIES[family].id,)
+
+    def other_forms(self, current, done) -> list:
+        return []  # the families' other shapes enter the acceptance rule instead (its proxy test)
+
+    def try_models(self, step: Step, trials: list, residual: dict) -> list:
+        at_floor = residual["rms_over_noise"] <= EXPLAINED_RATIO
+        out = []
+        for family, effect_id, _ in trials:
+            try:
+                out.append(_try(self.record, step, family, self.folds, at_floor))
+            except InputError as exc:  # a candidate that cannot be fitted is rejected, never the end
+                out.append(Candidate.failed(family, effect_id, str(exc)))
+        return out
+
+    def explained(self, step: Step) -> dict:
+        if "whiteness" not in step.memo:
+            step.memo["whiteness"] = _explained(step.fit)
+        return step.memo["whiteness"]
+
+    def confidence(self, steps) -> dict:
+        return {}
+
+    def findings(self, step) -> list:
+        return []
 
 
 def _explained(fit: RunningFit) -> dict:
@@ -240,44 +243,47 @@ def _share(rec, before: RunningFit, after: RunningFit) -> float:
     return min(max((before.rss - after.rss) / missing, 0.0), 1.0) if missing > 0 else 0.0
 
 
-def _proxy_gains(rec, current: RunningStep, family: str, folds) -> list[float] | None:
+def _proxy_gains(rec, current: Step, family: str, folds) -> list[float] | None:
     """Held-out gains of ``family`` over the model whose families may take their other shapes
     (None when the model has no family to widen)."""
     if not current.effects:
         return None
-    if current.widened_folds is False:
-        current.widened_folds = _holdout_rss(rec, current.effects, folds, widened=current.effects)
-    widened = current.widened_folds
+    if "widened" not in current.memo:  # the same for every candidate of the round: computed once
+        current.memo["widened"] = _holdout_rss(rec, current.effects, folds, widened=current.effects)
     both = _holdout_rss(rec, current.effects + [family], folds, widened=current.effects)
-    return _gains(both, widened) or [0.0]
+    return _gains(both, current.memo["widened"]) or [0.0]
 
 
-def _try(rec, current: RunningStep, family: str, folds, at_floor: bool) -> RunningCandidate:
+def _try(rec, current: Step, family: str, folds, at_floor: bool,
+         thresholds: Thresholds = RUNNING_THRESHOLDS) -> Candidate:
+    """Fit the model of ``current`` plus ``family`` and apply the running-torque acceptance rule."""
     families = current.effects + [family]
     fit = fit_running(rec, families)
     base = current.fit
     n_eff = fit.n_eff
-    score = fit.bic(n_eff) - base.bic(n_eff)
-    share = _share(rec, base, fit)
-    gains = _gains(_holdout_rss(rec, families, folds), current.folds)
-    cand = RunningCandidate(family, fit, float(score), float(share), gains)
-    bar = HOLDOUT_GAIN_AT_FLOOR if at_floor else HOLDOUT_GAIN
+    score = float(fit.bic(n_eff) - base.bic(n_eff))
+    share = float(_share(rec, base, fit))
+    held = _holdout_rss(rec, families, folds)  # the next step's folds if it is added
+    gains = _gains(held, current.fold_fits)
+    cand = Candidate(family, RUNNING_FAMILIES[family].id, fit, fold_fits=held, score=score, n_eff=n_eff,
+                     holdout_gain=gains, share=share, figures={"rmse_Nm": fit.rmse_Nm, "share_explained": share})
+    bar = thresholds.floor_holdout_gain if at_floor else thresholds.holdout_gain
     if not gains:
         cand.reason = "the plateaus are too short to hold half of each out: nothing is added unvalidated"
-    elif score >= -BIC_MARGIN and min(gains) < STRONG_HOLDOUT_GAIN:
-        cand.reason = f"the BIC changes by {score:+.3g}; it must fall by more than {BIC_MARGIN:g}"
+    elif score >= thresholds.score and min(gains) < thresholds.strong_holdout_gain:
+        cand.reason = f"the BIC changes by {score:+.3g}; it must fall by more than {-thresholds.score:g}"
     elif min(gains) < bar:
         cand.reason = (f"it predicts held-out halves of the plateaus better by {100 * min(gains):.1f} %, less than "
                        f"{100 * bar:.0f} %" + (" (the rms is at the noise floor already)" if at_floor else ""))
-    elif share < MIN_SHARE:
+    elif share < thresholds.min_share:
         cand.reason = (f"it removes {100 * share:.0f} % of the residual above the noise floor, less than "
-                       f"{100 * MIN_SHARE:.0f} %: a patch for another family's form, not a missing family")
+                       f"{100 * thresholds.min_share:.0f} %: a patch for another family's form, not a missing family")
     else:
         proxy = _proxy_gains(rec, current, family, folds)
-        if proxy is not None and min(proxy) < PROXY_HOLDOUT_GAIN:
+        if proxy is not None and min(proxy) < thresholds.proxy_holdout_gain:
             cand.reason = (f"a proxy: once {', '.join(current.effects)} may take other shapes of their own, it "
                            f"predicts held-out halves better by {100 * min(proxy):.1f} % only (less than "
-                           f"{100 * PROXY_HOLDOUT_GAIN:.0f} %)")
+                           f"{100 * thresholds.proxy_holdout_gain:.0f} %)")
         else:
             cand.accepted = True
             cand.reason = f"removes {100 * share:.0f} % of the residual above the noise floor"
@@ -285,8 +291,9 @@ def _try(rec, current: RunningStep, family: str, folds, at_floor: bool) -> Runni
 
 
 def diagnose_running(meas: Measurement | SweepRecord, effects=None, *, families=None,
-                     max_rounds: int | None = None, log=None) -> RunningDiagnosis:
-    """Find the running-torque families a sweep needs beyond ``effects``.
+                     max_rounds: int | None = None, log=None) -> Diagnosis:
+    """Find the running-torque families a sweep needs beyond ``effects`` (the running-torque
+    kind's `TestKind.diagnose`).
 
     Parameters
     ----------
@@ -303,43 +310,9 @@ def diagnose_running(meas: Measurement | SweepRecord, effects=None, *, families=
 
     Returns
     -------
-    RunningDiagnosis
-        Every round, the families added and the ambiguous pairs.
+    hdsim.identification.engine.Diagnosis
     """
-    start = time.perf_counter()
-    rec = meas if isinstance(meas, SweepRecord) else SweepRecord.of(meas)
-    chosen = parse_running_effects(effects)
-    pool = parse_running_effects(families) if families is not None else list(RUNNING_FAMILIES)
-    folds = _halves(rec)
-    step = RunningStep(chosen, fit_running(rec, chosen), _holdout_rss(rec, chosen, folds))
-    steps, added, ambiguous = [step], [], []
-    rounds = len(pool) if max_rounds is None else max_rounds
-    while True:
-        at_floor = _explained(step.fit)["rms_over_noise"] <= EXPLAINED_RATIO
-        for family in [f for f in pool if f not in step.effects]:
-            try:
-                step.candidates.append(_try(rec, step, family, folds, at_floor))
-            except InputError as exc:  # a candidate that cannot be fitted is rejected, never the end
-                step.candidates.append(RunningCandidate(family, None, reason=f"could not be fitted: {exc}"))
-        passing = sorted((c for c in step.candidates if c.accepted), key=lambda c: c.score)
-        if log:
-            log(f"{', '.join(step.effects) or 'base'}: rms {step.fit.rmse_Nm:.3g} N·m; "
-                + "; ".join(f"{c.family} {c.score:.3g}" for c in sorted(step.candidates, key=lambda c: c.score)))
-        if not passing or len(added) >= rounds:
-            break
-        best = passing[0]
-        for other in passing[1:]:
-            if abs(other.share - best.share) < AMBIGUOUS_SHARE:
-                pair = frozenset({best.family, other.family})
-                entry = {"families": sorted(pair), "measurement": SEPARATING.get(pair, "")}
-                if entry not in ambiguous:  # the same pair may come up again in a later round
-                    ambiguous.append(entry)
-        step.added = best.family
-        added.append(best.family)
-        effects = step.effects + [best.family]
-        step = RunningStep(effects, best.fit, _holdout_rss(rec, effects, folds))
-        steps.append(step)
-    return RunningDiagnosis(rec, steps, added, ambiguous, time.perf_counter() - start)
+    return test_kind("running_torque").diagnose(meas, effects, families=families, max_rounds=max_rounds, log=log)
 
 
 def running_limits(diagnosis_json: dict, data: dict, ranking: list) -> list[str]:

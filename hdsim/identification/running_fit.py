@@ -32,11 +32,11 @@ from scipy.optimize import lsq_linear
 
 from hdsim.errors import InputError
 from hdsim.identification.optimizer import FittedRows, effective_n
-from hdsim.io.data_checks import noise_level
 from hdsim.io.measurement import Measurement
 from hdsim.io.running_checks import Segment, sweep_kinematics
 from hdsim.model.input_friction import InputFriction
 from hdsim.model.running_terms import BASE_TERM, RUNNING_FAMILIES, PositionRipple, RunningTerm, unit_law
+from hdsim.signals import noise_level
 
 __all__ = ["SweepRecord", "Segment", "RunningFit", "fit_running", "running_plausibility"]
 
@@ -255,6 +255,48 @@ class RunningFit(FittedRows):
         write_text_atomic(path, self.to_toml())
         return path
 
+    @property
+    def drive(self):
+        """The drive the sweep was fitted for, running the fitted law (`drive_for` of the default unit).
+
+        ``hdsim.run_scenario(fit.drive, "running_torque")`` runs the measured friction and
+        ``hdsim.sobol(fit.drive, {"input_friction.coulomb_torque": (lo, hi)}, …)`` studies it.
+        """
+        return self.drive_for(None)
+
+    def drive_for(self, unit=None):
+        """A drive whose input friction is the fitted law.
+
+        The drive is the one `hdsim.fit` starts a locked fit from: ``unit`` (a built-in name,
+        a drive file or a `HarmonicDrive`; None: the default unit) with the record's ratio
+        and rated torque where it gives them. Its ``input_friction`` becomes the fitted law.
+
+        Torque side: the drive's input friction acts on the wave-generator (input) shaft, and
+        so does the law: a record with ``torque_side: output`` was referred to the input when
+        read, WG-shaft torque = file torque / ratio (`SweepRecord.side_factor`), so the law goes
+        in unchanged, and the drive's running torque on the input times the ratio is the
+        record's on the output (`metrics`). Two fields the sweep cannot determine keep the
+        drive's values: the mesh-loss coefficient ``μ`` (no load: it would add to ``F_c``
+        unseen) and the smoothing speed ``ω_ε`` of the direction switch (the fit's is a
+        regularisation below its slowest rows, where ``tanh`` is 1 either way).
+
+        Parameters
+        ----------
+        unit : str, os.PathLike or HarmonicDrive, optional
+            The drive to start from; default the catalog's default unit.
+
+        Returns
+        -------
+        HarmonicDrive
+            That drive with ``input_friction`` = the fitted law [N·m on the WG shaft].
+        """
+        from hdsim.identification.fit import _unit_model  # same start as a locked fit's model
+
+        base = _unit_model(unit, self.measurement)
+        own = base.input_friction
+        law = self.law.with_updates(load_coefficient=own.load_coefficient, velocity_scale=own.velocity_scale)
+        return base.with_input_friction(law)
+
 
 def _design(rec: SweepRecord, terms: list[RunningTerm], nonlinear: dict, widened: tuple = ()) -> tuple:
     """Columns of every term (and the other shapes of the ``widened`` families) plus the inertia
@@ -320,16 +362,13 @@ def fit_running(record, families=(), rows=None, widened=()) -> RunningFit:
     best = None
     for nonlinear in choices:
         owners, names, A, lo, hi = _design(rec, terms, nonlinear, tuple(widened))
-        x = _solve(A[use], y[use], lo, hi)
+        x = _held_solution(rec, terms, owners, names, A[use], y[use], lo, hi, nonlinear)
         r = y[use] - A[use] @ x
         rss = float(r @ r)
         if best is None or rss < best[0]:
             best = (rss, nonlinear, owners, names, A, x)
     rss, nonlinear, owners, names, A, x = best
-    law = unit_law(rec.velocity_scale)
-    for term in terms:
-        law = term.write_back(law, {n: float(v) for o, n, v in zip(owners, names, x) if o is term},
-                              nonlinear.get(term.family))
+    law = _law_of(rec, terms, owners, names, x, nonlinear)
     inertia = float(x[-1])
     side = rec.side_factor
     prediction = side * (law.torque(rec.speed, rec.measurement.wg_angle) + inertia * rec.accel)
@@ -337,11 +376,59 @@ def fit_running(record, families=(), rows=None, widened=()) -> RunningFit:
     if shapes:  # the other shapes of widened families (not in the law)
         prediction = prediction + side * (A[:, shapes] @ x[shapes])
     residual = np.asarray(rec.measurement.torque, dtype=float) - prediction
+    _check_law_holds(residual[use] / side, rss, y[use])
     n_params = len(names) + len(grids)
     fitted = {f"{_owner_name(o)}.{n}": float(v) for o, n, v in zip(owners, names, x)}
     fitted.update({f"{f}.stribeck_speed": float(v) for f, v in nonlinear.items()})
     sigma = _uncertainty(A[use], y[use] - A[use] @ x, owners, names)
     return RunningFit(rec, families, law, inertia, prediction, residual, use, n_params, fitted, sigma)
+
+
+def _law_of(rec: SweepRecord, terms: list, owners: list, names: list, x: np.ndarray, nonlinear: dict):
+    """The law with the amplitudes ``x`` written back, or None when a term cannot hold its
+    amplitudes (`RunningTerm.holds`)."""
+    law = unit_law(rec.velocity_scale)
+    for term in terms:
+        coefficients = {n: float(v) for o, n, v in zip(owners, names, x) if o is term}
+        if not term.holds(law, coefficients):
+            return None
+        law = term.write_back(law, coefficients, nonlinear.get(term.family))
+    return law
+
+
+def _held_solution(rec, terms, owners, names, A, y, lower, upper, nonlinear) -> np.ndarray:
+    """The bounded least-squares amplitudes on rows ``A``, ``y`` that the law holds.
+
+    The columns span amplitudes the law may not hold (a ripple on a Coulomb level that
+    fell to 0): written back, such a solution loses a term and fits worse than the model
+    without it. Then each family in turn is set to its neutral value (its amplitudes 0)
+    and the rest solved again, recursively, and the best held solution is kept: with the
+    family just added neutral, that is the solution of the model it contains, so a larger
+    model never fits worse. The base always holds, so the recursion ends.
+    """
+    x = _solve(A, y, lower, upper)
+    if _law_of(rec, terms, owners, names, x, nonlinear) is not None:
+        return x
+    best = None
+    for term in terms[1:]:  # the base level (first) is every model's
+        keep = np.array([o is not term for o in owners])
+        sub = np.zeros_like(x)
+        sub[keep] = _held_solution(rec, [t for t in terms if t is not term], [o for o, k in zip(owners, keep) if k],
+                                   [n for n, k in zip(names, keep) if k], A[:, keep], y, lower[keep], upper[keep],
+                                   nonlinear)
+        r = y - A @ sub
+        if best is None or float(r @ r) < best[0]:
+            best = (float(r @ r), sub)
+    return best[1]
+
+
+def _check_law_holds(residual: np.ndarray, rss: float, y: np.ndarray) -> None:
+    """Raise `RuntimeError` (an internal error) when the law written back does not reproduce
+    the fitted amplitudes: its residual on the fitted rows must have the least-squares RSS."""
+    law_rss = float(residual @ residual)
+    if not abs(law_rss - rss) <= 1e-6 * max(rss, 1e-12 * float(y @ y)):
+        raise RuntimeError(f"internal error: the running-torque law written back leaves RSS {law_rss:.9g} N²·m², "
+                           f"the fitted amplitudes {rss:.9g}: a term did not hold its amplitudes")
 
 
 def _product(grids: list) -> list:

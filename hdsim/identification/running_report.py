@@ -24,7 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from hdsim.atomic import write_text_atomic
-from hdsim.identification.report import _check_rows, _figure, _html_table, _md_table, _outcome_line, _save
+from hdsim.identification.report_page import (CHECK_HEAD, check_rows, html_page, html_table, md_table, new_figure,
+                                              outcome_line, save)
 
 __all__ = ["torque_vs_speed", "ripple_vs_angle", "fit_figures", "write_running_report", "RUNNING_FIGURES"]
 
@@ -56,7 +57,7 @@ def torque_vs_speed(fit, path, catalog_running_torque: float | None = None) -> P
     rec = fit.record
     side = abs(rec.side_factor)
     torque = np.asarray(rec.measurement.torque, dtype=float)
-    fig = _figure((7, 4.5))
+    fig = new_figure((7, 4.5))
     ax = fig.subplots()
     speeds = np.array([s.speed for s in rec.segments])
     levels = np.array([np.mean(torque[s.start:s.stop]) for s in rec.segments])
@@ -72,7 +73,7 @@ def torque_vs_speed(fit, path, catalog_running_torque: float | None = None) -> P
     ax.set_ylabel(f"torque on the {rec.measurement.torque_side} [N·m]")
     ax.set_title("running torque vs speed")
     ax.legend(fontsize=8)
-    return _save(fig, Path(path))
+    return save(fig, Path(path))
 
 
 def ripple_vs_angle(fit, path, bins: int = 72) -> Path:
@@ -100,7 +101,7 @@ def ripple_vs_angle(fit, path, bins: int = 72) -> Path:
     model = side * (flat.torque(rec.speed, meas.wg_angle) + fit.inertia * rec.accel)
     level = (np.asarray(meas.torque, dtype=float) - model) * np.sign(rec.speed)
     theta = np.mod(np.asarray(meas.wg_angle, dtype=float), 2.0 * math.pi)
-    fig = _figure((7, 4))
+    fig = new_figure((7, 4))
     ax = fig.subplots()
     edges = np.linspace(0.0, 2.0 * math.pi, bins + 1)
     which = np.digitize(theta[plateau], edges) - 1
@@ -115,7 +116,7 @@ def ripple_vs_angle(fit, path, bins: int = 72) -> Path:
     ax.set_ylabel(f"level [N·m, {meas.torque_side}]")
     ax.set_title("ripple vs wave-generator angle")
     ax.legend(fontsize=8)
-    return _save(fig, Path(path))
+    return save(fig, Path(path))
 
 
 def fit_figures(fit, stem, catalog_running_torque: float | None = None) -> list[Path]:
@@ -131,7 +132,7 @@ def write_running_report(diagnosis, folder, assessment: dict | None = None,
 
     Parameters
     ----------
-    diagnosis : hdsim.identification.running_diagnosis.RunningDiagnosis
+    diagnosis : hdsim.identification.engine.Diagnosis
         The finished diagnosis.
     folder : str or os.PathLike
         Output folder, created if missing.
@@ -150,7 +151,7 @@ def write_running_report(diagnosis, folder, assessment: dict | None = None,
     assessment = assessment or {}
     meas = diagnosis.measurement
     t = np.asarray(meas.time, dtype=float)
-    fig = _figure((10, 3.5))
+    fig = new_figure((10, 3.5))
     ax = fig.subplots()
     for step in diagnosis.steps:
         r = np.where(step.fit.rows, step.fit.residual, np.nan)
@@ -158,18 +159,18 @@ def write_running_report(diagnosis, folder, assessment: dict | None = None,
     ax.set_xlabel("time [s]")
     ax.set_ylabel("residual [N·m]")
     ax.legend(fontsize=8)
-    drawn = [_save(fig, folder / RUNNING_FIGURES[0])]
+    drawn = [save(fig, folder / RUNNING_FIGURES[0])]
     final = diagnosis.final.fit
     drawn.append(torque_vs_speed(final, folder / RUNNING_FIGURES[1], catalog_running_torque))
     drawn.append(ripple_vs_angle(final, folder / RUNNING_FIGURES[2]))
-    fig = _figure((6, 3.5))
+    fig = new_figure((6, 3.5))
     ax = fig.subplots()
     ax.plot(range(len(diagnosis.steps)), [s.fit.rmse_Nm for s in diagnosis.steps], "o-", label="rms")
     ax.axhline(diagnosis.whiteness["noise_floor_Nm"], ls=":", color="0.5", label="noise floor")
     ax.set_xticks(range(len(diagnosis.steps)), [_label(s) for s in diagnosis.steps], fontsize=8)
     ax.set_ylabel("error [N·m]")
     ax.legend(fontsize=8)
-    drawn.append(_save(fig, folder / RUNNING_FIGURES[3]))
+    drawn.append(save(fig, folder / RUNNING_FIGURES[3]))
     names = [p.name for p in drawn]
     write_text_atomic(folder / "index.md", _markdown(diagnosis, assessment, names))
     page = folder / "index.html"
@@ -199,16 +200,16 @@ def _tables(diagnosis):
 def _markdown(diagnosis, assessment, figures) -> str:
     d, steps, rounds, law, metrics = _tables(diagnosis)
     parts = [f"# Diagnosis of {diagnosis.measurement.source}", ""]
-    if _outcome_line(assessment):
-        parts += [f"**{_outcome_line(assessment)}**", ""]
-    if _check_rows(assessment):
-        parts += ["## The data", "", _md_table(("status", "check", "what the data say"), _check_rows(assessment)), ""]
+    if outcome_line(assessment):
+        parts += [f"**{outcome_line(assessment)}**", ""]
+    if check_rows(assessment):
+        parts += ["## The data", "", md_table(CHECK_HEAD, check_rows(assessment)), ""]
     parts += [f"running-torque test, {len(diagnosis.measurement)} rows; hold-out by {d['holdout']}.", "",
-              f"**Verdict:** {d['verdict']}", "", "## Before and after", "", _md_table(HEAD, steps), ""]
+              f"**Verdict:** {d['verdict']}", "", "## Before and after", "", md_table(HEAD, steps), ""]
     for n, effects, rows in rounds:
-        parts += [f"## Round {n} (model: {effects})", "", _md_table(ROUND, rows), ""]
-    parts += ["## Fitted law (wave-generator shaft)", "", _md_table(("field", "value"), law), "",
-              _md_table(("metric", "value"), metrics), "", "## Figures", ""]
+        parts += [f"## Round {n} (model: {effects})", "", md_table(ROUND, rows), ""]
+    parts += ["## Fitted law (wave-generator shaft)", "", md_table(("field", "value"), law), "",
+              md_table(("metric", "value"), metrics), "", "## Figures", ""]
     parts += [f"![{f}]({f})" for f in figures]
     return "\n".join(parts) + "\n"
 
@@ -216,20 +217,16 @@ def _markdown(diagnosis, assessment, figures) -> str:
 def _html(diagnosis, assessment, figures) -> str:
     d, steps, rounds, law, metrics = _tables(diagnosis)
     body = [f"<h1>Diagnosis of {html.escape(str(diagnosis.measurement.source))}</h1>"]
-    if _outcome_line(assessment):
-        body.append(f"<p><b>{html.escape(_outcome_line(assessment))}</b></p>")
-    if _check_rows(assessment):
-        body += ["<h2>The data</h2>", _html_table(("status", "check", "what the data say"), _check_rows(assessment))]
+    if outcome_line(assessment):
+        body.append(f"<p><b>{html.escape(outcome_line(assessment))}</b></p>")
+    if check_rows(assessment):
+        body += ["<h2>The data</h2>", html_table(CHECK_HEAD, check_rows(assessment))]
     body += [f"<p>running-torque test, {len(diagnosis.measurement)} rows.</p>",
              f"<p><b>Verdict:</b> {html.escape(d['verdict'])}</p>", "<h2>Before and after</h2>",
-             _html_table(HEAD, steps)]
+             html_table(HEAD, steps)]
     for n, effects, rows in rounds:
-        body += [f"<h2>Round {n} (model: {html.escape(effects)})</h2>", _html_table(ROUND, rows)]
-    body += ["<h2>Fitted law (wave-generator shaft)</h2>", _html_table(("field", "value"), law),
-             _html_table(("metric", "value"), metrics)]
+        body += [f"<h2>Round {n} (model: {html.escape(effects)})</h2>", html_table(ROUND, rows)]
+    body += ["<h2>Fitted law (wave-generator shaft)</h2>", html_table(("field", "value"), law),
+             html_table(("metric", "value"), metrics)]
     body.append("<h2>Figures</h2>" + "".join(f'<p><img src="{f}" alt="{f}"></p>' for f in figures))
-    style = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}"
-             "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px;font-size:90%}"
-             "img{max-width:100%}")
-    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>hdsim diagnosis</title>"
-            f"<style>{style}</style></head><body>{''.join(body)}</body></html>\n")
+    return html_page("hdsim diagnosis", body)

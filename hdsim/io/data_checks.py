@@ -8,12 +8,8 @@ sentence a bench engineer would write in a log book. A ``fail`` of an *identity*
 that is identically zero, a ratio the angles contradict) means the record is not the
 test it claims; `wrong_test` gives that sentence (docs/measurements.md, "Checks").
 
-Noise is estimated from the data alone: the record minus its local cubic fit over seven
-samples (a Savitzky-Golay filter) keeps the white noise and removes any signal smooth
-over seven samples, curvature included (plain second differences read the curvature of
-a coarsely sampled cycle as noise). For white noise of rms σ that residual has rms
-``σ √(1 − h₀)``, h₀ the filter's centre weight (1/3); its median absolute value over
-0.6745 makes the estimate robust to the few steps (reversals, stick-slip) a record has.
+The signal analysis the checks rest on (noise without a model, torque legs, loading
+rates) is in `hdsim.signals`; a running-torque record goes to `hdsim.io.running_checks`.
 """
 
 from __future__ import annotations
@@ -23,8 +19,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Check", "DriveScale", "noise_level", "turning_points", "torque_legs", "loading_direction",
-           "loading_rates", "rate_groups", "run_checks", "wrong_test", "import_checks", "examine"]
+from hdsim.io.check import Check
+from hdsim.signals import loading_rates, noise_level, rate_groups, torque_legs
+
+__all__ = ["DriveScale", "run_checks", "wrong_test", "import_checks", "examine"]
 
 #: a locked drive twists at most this many times its softest catalog compliance predicts
 #: (K1 over the whole torque swing, plus a generous lost motion) before the record is
@@ -38,24 +36,8 @@ FOLLOW_MIN = 0.5
 #: torque noise over its swing: above the first a warning, above the second the record
 #: cannot show a loop at all
 NOISE_WARN, NOISE_FAIL = 0.05, 0.3
-#: two loading rates are distinct when they differ by more than this factor
-RATE_STEP = 1.5
-#: samples of the local cubic fit that the noise estimate subtracts
-NOISE_WINDOW = 7
 #: identity checks: a fail means the record is not the test it claims
 IDENTITY = ("twist_span", "angle_follows_torque", "kinematic_error_not_zero", "ratio_consistent", "turns_steadily")
-
-
-@dataclass(frozen=True)
-class Check:
-    """One data check: ``check`` (its name), ``status`` (ok, warn, fail) and ``message``."""
-
-    check: str
-    status: str
-    message: str
-
-    def to_json(self) -> dict:
-        return {"check": self.check, "status": self.status, "message": self.message}
 
 
 @dataclass(frozen=True)
@@ -95,103 +77,6 @@ class DriveScale:
                    float(catalog.get("K1", K)), float(catalog.get("K3", K)),
                    float(catalog_values(model)["running_torque_2000rpm"]),
                    float(np.max(np.abs(model.drive.ratio))))
-
-
-def local_cubic_weights(window: int) -> np.ndarray:
-    """Weights that give the centre value of a least-squares cubic through ``window``
-    samples (the Savitzky–Golay smoothing coefficients; Savitzky & Golay, 1964): the first
-    row of the Vandermonde matrix's pseudo-inverse. Written out because importing
-    ``scipy.signal`` for them costs about a second on every ``fit`` and ``diagnose``."""
-    offsets = np.arange(window) - window // 2
-    return np.linalg.pinv(np.vander(offsets, 4, increasing=True))[0]
-
-
-def noise_level(x) -> float:
-    """Rms of the white noise on a signal, estimated without a model (module text) [unit of x]."""
-    x = np.asarray(x, dtype=float)
-    if x.size < NOISE_WINDOW:
-        return 0.0
-    weights = local_cubic_weights(NOISE_WINDOW)
-    half = NOISE_WINDOW // 2
-    # centred windows only: the median of |residual| does not miss the few edge samples
-    residual = x[half:x.size - half] - np.convolve(x, weights[::-1], mode="valid")
-    # white noise of rms σ leaves σ²(1 − w₀) in x minus its local fit (w₀ the centre weight)
-    return float(np.median(np.abs(residual)) / 0.6745 / math.sqrt(1.0 - weights[half]))
-
-
-def smoothed(x, noise: float) -> tuple[np.ndarray, float]:
-    """``x`` through a centred moving average long enough to bring ``noise`` well under its
-    swing, and the noise left on it (``noise / √width``)."""
-    x = np.asarray(x, dtype=float)
-    swing = max(float(np.ptp(x)), 1e-300)
-    # the window's noise is noise/√w; aim at 1 % of the swing, within 1 … n/50 samples
-    w = int(min(max((noise / (0.01 * swing)) ** 2, 1.0), max(x.size // 50, 1)))
-    width = 2 * (w // 2) + 1
-    if width <= 1:
-        return x.copy(), noise
-    padded = np.pad(x, width // 2, mode="edge")
-    return np.convolve(padded, np.ones(width) / width, mode="valid"), noise / math.sqrt(width)
-
-
-def turning_points(x, band: float) -> list[int]:
-    """Indices where ``x`` turns back by more than ``band`` (a dead band ignores noise wiggles).
-
-    Returns the first index, every turning point and ``len(x)``.
-    """
-    x = np.asarray(x, dtype=float)
-    turns, direction = [0], 0
-    extreme, extreme_i = x[0], 0
-    for i in range(1, x.size):
-        v = x[i]
-        if direction == 0:
-            if abs(v - x[0]) > band:
-                direction, extreme, extreme_i = (1 if v > x[0] else -1), v, i
-        elif direction * (v - extreme) > 0:
-            extreme, extreme_i = v, i
-        elif direction * (extreme - v) > band:
-            turns.append(extreme_i)
-            direction, extreme, extreme_i = -direction, v, i
-    turns.append(x.size)
-    return turns
-
-
-def torque_legs(torque) -> tuple[np.ndarray, list[int]]:
-    """The smoothed torque and its turning points (`turning_points`), with a dead band set
-    by the torque's own noise: five times the noise left after smoothing, at least 2 % of
-    the swing, so the noise of a torque computed from motor current does not turn a leg."""
-    T = np.asarray(torque, dtype=float)
-    smooth, left = smoothed(T, noise_level(T))
-    band = max(5.0 * left, 0.02 * float(np.ptp(smooth)), 1e-12)
-    return smooth, turning_points(smooth, band)
-
-
-def loading_direction(time, torque) -> tuple[np.ndarray, np.ndarray]:
-    """(sign, magnitude) of the loading at each sample: +1 loading up, −1 down, the sign of
-    the leg between turning points (`torque_legs`), and |dT/dt| of the smoothed torque [N·m/s]."""
-    smooth, turns = torque_legs(torque)
-    sign = np.zeros(smooth.size)
-    for a, b in zip(turns[:-1], turns[1:]):
-        sign[a:b] = np.sign(smooth[b - 1] - smooth[a]) if b - a > 1 else 0.0
-    return sign, np.abs(np.gradient(smooth, np.asarray(time, dtype=float)))
-
-
-def loading_rates(time, smooth_torque, turns) -> np.ndarray:
-    """Mean |dT/dt| [N·m/s] of each monotone leg between turning points."""
-    t = np.asarray(time, dtype=float)
-    rates = []
-    for a, b in zip(turns[:-1], turns[1:]):
-        if b - a > 2 and t[b - 1] > t[a]:
-            rates.append(abs(smooth_torque[b - 1] - smooth_torque[a]) / (t[b - 1] - t[a]))
-    return np.array(rates)
-
-
-def rate_groups(values, step: float = RATE_STEP) -> list[float]:
-    """The median of each group ``values`` fall in, neighbours within a factor ``step`` being one group."""
-    v = np.sort(np.asarray(values, dtype=float)[np.asarray(values) > 0])
-    if v.size == 0:
-        return []
-    cuts = np.flatnonzero(np.diff(np.log(v)) > math.log(step)) + 1
-    return [float(np.median(g)) for g in np.split(v, cuts)]
 
 
 def _rank_correlation(a, b) -> float:
@@ -387,6 +272,8 @@ def examine(meas, drive: DriveScale) -> tuple[list[Check], dict, str]:
     (``noise_floor_rad``, ``torque_noise_Nm``), the reversals and the distinct loading rates.
     """
     if meas.test == "running_torque":
+        # imported here: running_checks loads scipy.signal (about a second) that a locked
+        # or kinematic-error record never needs; the dependency still runs one way only
         from hdsim.io.running_checks import running_checks
 
         checks, figures = running_checks(meas, drive)

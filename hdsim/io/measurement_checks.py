@@ -55,6 +55,27 @@ OPTIONAL_COLUMNS: dict[str, tuple[str, ...]] = {
 #: Of these, a test needs at least one.
 ONE_OF: dict[str, tuple[str, ...]] = {"running_torque": ("wg_angle_rad", "output_angle_rad")}
 
+#: the tests built in (a registered test kind adds its own; `register_test_columns`)
+_BUILTIN_TESTS = tuple(TESTS)
+
+
+def register_test_columns(test: str, columns, optional=()) -> None:
+    """Let the file reader take records of a test the identification layer registered
+    (`hdsim.identification.test_kinds.register_test_kind`): its columns by canonical SI
+    name, and those of them it may lack. A built-in test's columns cannot be replaced."""
+    if test in _BUILTIN_TESTS:
+        raise InputError(f"the {test} test is built in; its columns cannot be replaced")
+    TESTS[test] = tuple(columns)
+    OPTIONAL_COLUMNS[test] = tuple(optional)
+
+
+def unregister_test_columns(test: str) -> None:
+    """Forget a test added with `register_test_columns`."""
+    if test not in _BUILTIN_TESTS:
+        TESTS.pop(test, None)
+        OPTIONAL_COLUMNS.pop(test, None)
+
+
 #: Values of ``# torque_side:`` (running-torque test): the shaft the torque is referred to.
 TORQUE_SIDES = ("input", "output")
 

@@ -27,7 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import savgol_filter
 
-from hdsim.io.data_checks import Check, noise_level
+from hdsim.io.check import Check
+from hdsim.signals import noise_level
 
 __all__ = ["Segment", "speed_and_acceleration", "sweep_kinematics", "constant_speed_segments", "distinct_speeds",
            "running_checks", "PLATEAU_TOLERANCE"]

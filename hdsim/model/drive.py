@@ -1,7 +1,8 @@
-"""The harmonic drive model: geometry, calibration, inertias and five effect slots.
+"""The harmonic drive model: geometry, calibration, inertias, five effect slots, input friction.
 
 A `HarmonicDrive` holds parameters only. Every numeric parameter has a
-dotted name (``flexspline.h_c``, ``friction.k_h``, ``drive.J_out`` …) so studies,
+dotted name (``flexspline.h_c``, ``friction.k_h``, ``drive.J_out``,
+``input_friction.coulomb_torque`` …) so studies,
 fits and the CLI's ``--set`` address them uniformly; `HarmonicDrive.with_updates`
 returns a new model and accepts arrays, giving a *batch* model that the solver
 integrates for all parameter sets at once.
@@ -18,6 +19,7 @@ from hdsim.model import effects as fx
 from hdsim.model.parameters import Parameters, _as_float_array, param
 from hdsim.errors import InputError, unknown_name
 from hdsim.model.geometry import FlexsplineGeometry
+from hdsim.model.input_friction import InputFriction, catalog_friction
 from hdsim.physics import compliance as cc
 
 SLOTS = ("hardening", "backlash", "friction", "damping", "kinematic_error")
@@ -148,12 +150,17 @@ def compliance_chain(g: FlexsplineGeometry, wg: WaveGenerator, kappa_mesh=1.0) -
 
 
 _COMPONENTS = {"flexspline": "geometry", "wave_generator": "wave_generator", "drive": "drive",
-               "calibration": "calibration"}
+               "calibration": "calibration", "input_friction": "input_friction"}
 
 
 @dataclass(frozen=True, eq=False)
 class HarmonicDrive:
-    """A harmonic drive: named unit, geometry, calibration, inertias and effect slots."""
+    """A harmonic drive: named unit, geometry, calibration, inertias, effect slots and input friction.
+
+    ``input_friction`` is the running-torque law of the wave-generator shaft
+    (`hdsim.model.input_friction.InputFriction`), which the driven bench runs; left out, it
+    is the catalog law of the unit (`hdsim.model.input_friction.catalog_friction`).
+    """
 
     name: str
     geometry: FlexsplineGeometry
@@ -166,12 +173,18 @@ class HarmonicDrive:
     damping: fx.Effect = field(default_factory=lambda: fx.NO_EFFECT["damping"])
     kinematic_error: fx.Effect = field(default_factory=lambda: fx.NO_EFFECT["kinematic_error"])
     provenance: dict = field(default_factory=dict)
+    input_friction: InputFriction | None = None
 
     def __post_init__(self):
         for slot in SLOTS:
             effect = getattr(self, slot)
             if not isinstance(effect, fx.Effect) or effect.family != slot:
                 raise InputError(f"slot {slot} holds {type(effect).__name__}, not a {slot} effect")
+        if self.input_friction is None:
+            # frozen: the default depends on the unit's name and rating, so it is set here once
+            object.__setattr__(self, "input_friction", catalog_friction(self))
+        elif not isinstance(self.input_friction, InputFriction):
+            raise InputError(f"input_friction holds {type(self.input_friction).__name__}, not an InputFriction")
 
     # ----------------------------------------------------------- compliance
     def compliance(self) -> ComplianceChain:
@@ -208,8 +221,15 @@ class HarmonicDrive:
         """A new model with the named families switched to their "no effect"."""
         return self.with_effects(**{f: fx.NO_EFFECT[f] for f in families})
 
+    def with_input_friction(self, law: InputFriction) -> "HarmonicDrive":
+        """A new model whose wave-generator shaft runs ``law`` (on the input shaft, [N·m])."""
+        if not isinstance(law, InputFriction):
+            raise InputError(f"input_friction must be an InputFriction, got {type(law).__name__}")
+        return replace(self, input_friction=law)
+
     # ----------------------------------------------------------- parameters
     def _parts(self) -> dict[str, object]:
+        """Every parameter holder by the prefix of its dotted names."""
         parts = {prefix: getattr(self, attr) for prefix, attr in _COMPONENTS.items()}
         parts.update(self.effects())
         return parts

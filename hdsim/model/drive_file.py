@@ -16,7 +16,7 @@ it is given a path instead of a built-in unit name::
     [flexspline]                    # optional: dimensions [m] as in the model (flexspline.h_pz ...)
     h_pz = 0.5e-3
 
-The unit is built by the recipe of the built-in units (`hdsim.model.catalog.assemble_unit`);
+The unit is built by the recipe of the built-in units (`hdsim.model.datasheet.assemble_unit`);
 what the file does not give comes from the built-in units (`reference`):
 
 1. **Rating at ratio 100.** The rated torque of a size falls with the ratio: fewer,
@@ -57,7 +57,7 @@ what the file does not give comes from the built-in units (`reference`):
 6. **Kinematic error** takes the nearest unit's transmission-accuracy class; the slip
    torque of the friction is ``0.06 T_N`` as for the built-ins.
 
-**Calibration.** As for a built-in unit, `hdsim.model.catalog.calibrate` makes the
+**Calibration.** As for a built-in unit, `hdsim.model.datasheet.calibrate` makes the
 closed-form chain reproduce K1, K2, K3. When the file gives any K together with
 ``[flexspline]`` dimensions, the datasheet's stiffness belongs to the datasheet's
 geometry, so the calibration is made with those dimensions in place. When every K is
@@ -84,7 +84,7 @@ from pathlib import Path
 import numpy as np
 
 from hdsim.errors import InputError, unknown_name
-from hdsim.model import catalog
+from hdsim.model import datasheet
 from hdsim.model.drive import HarmonicDrive
 from hdsim.model.geometry import FlexsplineGeometry
 from hdsim.units import arcmin_to_rad, rad_to_arcmin
@@ -256,7 +256,7 @@ def rating_factor(ratio: float) -> float:
         hdsim/data/units.toml, from the Harmonic Drive CSG and HFUC ratings), constant
         outside them (1 above ratio 100).
     """
-    data = catalog._data()["drive_file"]
+    data = datasheet._data()["drive_file"]
     return float(np.interp(abs(ratio), data["rating_ratio"], data["rating_factor"]))
 
 
@@ -286,8 +286,8 @@ def reference(rated_torque: float, ratio: float) -> dict:
     scaled by the cube law: size ∝ ``T_100^(1/3)``, T1, T2 and K1-K3 ∝ size³.
     """
     t100 = rated_torque / rating_factor(ratio)
-    names = catalog.unit_names()
-    entries = sorted((catalog.catalog_entry(n)["rated_torque"], n) for n in names)
+    names = datasheet.unit_names()
+    entries = sorted((datasheet.catalog_entry(n)["rated_torque"], n) for n in names)
     rated = np.array([t for t, _ in entries])
     nearest = entries[int(np.argmin(np.abs(np.log(t100 / rated))))][1]
     figures = ("size", "T1", "T2", "K1", "K2", "K3")
@@ -295,12 +295,12 @@ def reference(rated_torque: float, ratio: float) -> dict:
         i = int(np.clip(np.searchsorted(rated, t100), 1, len(rated) - 1))
         (ta, a), (tb, b) = entries[i - 1], entries[i]
         w = math.log(t100 / ta) / math.log(tb / ta)
-        ea, eb = catalog.catalog_entry(a), catalog.catalog_entry(b)
+        ea, eb = datasheet.catalog_entry(a), datasheet.catalog_entry(b)
         out = {k: ea[k] ** (1.0 - w) * eb[k] ** w for k in figures}
         out.update(between=(a, b), rule=f"power law in rated torque between {a} and {b}")
     else:
         end = entries[0] if t100 < rated[0] else entries[-1]
-        e = catalog.catalog_entry(end[1])
+        e = datasheet.catalog_entry(end[1])
         cube = t100 / end[0]  # (s / s_ref)³
         out = {k: e[k] * (cube if k != "size" else cube ** (1.0 / 3.0)) for k in figures}
         out.update(between=(end[1], end[1]), rule=f"{end[1]} × (s/s_ref)³ (cube law)")
@@ -403,7 +403,7 @@ def drive_from_table(table: dict, source: str) -> HarmonicDrive:
         the elastic span ``0.08 T_N/K1``, or a geometry the closed forms refuse.
     """
     values = check_table(dict(table), source)
-    data = catalog._data()
+    data = datasheet._data()
     fxd = data["effects"]
     ratio, rated = values["ratio"], values["rated_torque_Nm"]
     ref = reference(rated, ratio)
@@ -417,13 +417,13 @@ def drive_from_table(table: dict, source: str) -> HarmonicDrive:
              **{CATALOG_FIELDS[k]: v for k, v in figures.items()}}
     dims = values.get("flexspline", {})
     k_given = any(k in values for k in STIFFNESS_KEYS)
-    ref_ratio = catalog.catalog_entry(unit)["ratio"]
+    ref_ratio = datasheet.catalog_entry(unit)["ratio"]
     slip = 0.5 * values["hysteresis_loss_arcmin"] if "hysteresis_loss_arcmin" in values else fxd["slip_arcmin"]
     try:
-        geometry = catalog.nominal_geometry(size, ratio)
+        geometry = datasheet.nominal_geometry(size, ratio)
         if dims and k_given:  # the datasheet's stiffness is the stiffness of the datasheet's geometry
             geometry = geometry.replace(**dims)
-        model = catalog.assemble_unit(
+        model = datasheet.assemble_unit(
             values["name"], size, entry, accuracy_arcmin=data["kinematic_error"]["accuracy_arcmin"][unit],
             backlash_arcmin=fxd["backlash_arcmin"] * ref_ratio / ratio, slip_arcmin=slip,
             geometry=geometry, provenance={})
@@ -459,7 +459,7 @@ def drive_from_table(table: dict, source: str) -> HarmonicDrive:
                   "geometry": ("drive file [flexspline] on " if dims else "") + "assumed proportions, "
                               "hdsim/data/units.toml",
                   "drive_file": note}
-    return replace(model, provenance=catalog._read_only(provenance))
+    return replace(model, provenance=datasheet._read_only(provenance))
 
 
 def drive_table(model: HarmonicDrive) -> dict | None:
@@ -523,9 +523,9 @@ def template() -> str:
     str
         TOML text.
     """
-    name = catalog.default_unit()
-    entry = catalog.catalog_entry(name)
-    geometry = catalog.nominal_geometry(entry["size"], entry["ratio"]).as_dict()
+    name = datasheet.default_unit()
+    entry = datasheet.catalog_entry(name)
+    geometry = datasheet.nominal_geometry(entry["size"], entry["ratio"]).as_dict()
     example = {"name": "MY-DRIVE-25-100", "ratio": entry["ratio"], "rated_torque_Nm": entry["rated_torque"],
                **{k: entry[v] for k, v in CATALOG_FIELDS.items() if k not in ("ratio", "rated_torque_Nm")},
                "lost_motion_arcmin": 1.0, "hysteresis_loss_arcmin": 1.0}

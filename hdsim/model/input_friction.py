@@ -36,14 +36,18 @@ torque). Every term is linear in its amplitude (``F_c``, ``F_s − F_c``, ``Δ``
 memoryless (the Stribeck curve is a function of speed), so it adds no ODE state;
 ``ω_ε`` is the only regularisation.
 
-**Where the parameters live.** `hdsim.model.drive.HarmonicDrive` has no slot for
-input friction, so it is *not* a model parameter: `for_unit` builds an
-`InputFriction` from the catalog numbers in ``hdsim/data/input_friction.toml``
-(starting torque and no-load running torque at 2000 rpm from the Schaeffler RT1-H-CS
-catalog, i = 100, +20 °C, and one mesh-loss coefficient ``μ`` for all sizes, set by the
-catalog efficiency at rated torque), and a driven scenario may override any field in its
-``[input_friction]`` table (``model = "none"`` switches it off). Temperature is not
-modelled: the catalog figures are those at +20 °C.
+**Where the parameters live.** `hdsim.model.drive.HarmonicDrive` carries its law as
+``drive.input_friction``; its scalar fields are model parameters named
+``input_friction.<field>`` (``input_friction.coulomb_torque`` …), so ``with_updates``,
+``--set`` and Sobol studies address them like any other, and the drive of a
+running-torque fit carries the fitted law. A drive built without one gets the catalog law
+of its unit (`catalog_friction`: the catalog numbers in
+``hdsim/data/input_friction.toml``, starting torque and no-load running torque at 2000 rpm
+from the Schaeffler RT1-H-CS catalog, i = 100, +20 °C, and one mesh-loss coefficient ``μ``
+for all sizes, set by the catalog efficiency at rated torque). A driven scenario runs the
+drive's law with its ``[input_friction]`` table applied on top (`for_unit`; ``model =
+"none"`` switches it off, ``model = "catalog"`` starts from the unit's catalog law
+instead). Temperature is not modelled: the catalog figures are those at +20 °C.
 """
 
 from __future__ import annotations
@@ -52,10 +56,12 @@ import functools
 import tomllib
 from dataclasses import dataclass, fields, replace
 from importlib import resources
+from typing import ClassVar
 
 import numpy as np
 
 from hdsim.errors import InputError, unknown_name
+from hdsim.model.parameters import Parameters, _as_float_array, param
 from hdsim.units import rpm_to_rad_per_s
 
 #: reference speed of the catalog's no-load running torque [rad/s]
@@ -63,39 +69,60 @@ CATALOG_SPEED = rpm_to_rad_per_s(2000.0)
 
 
 @dataclass(frozen=True)
-class InputFriction:
-    """Friction torque on the WG shaft [N·m] as a function of WG speed, angle and mesh torque."""
+class InputFriction(Parameters):
+    """Friction torque on the WG shaft [N·m] as a function of WG speed, angle and mesh torque.
 
-    starting_torque: float  # F_s [N·m], breakaway
-    coulomb_torque: float   # F_c [N·m], level after the Stribeck dip
-    viscous: float          # b [N·m·s/rad]
-    stribeck_speed: float   # ω_s [rad/s]
-    velocity_scale: float = 0.01  # ω_ε [rad/s]
+    The scalar fields are parameters (`hdsim.model.parameters.param`: unit, bounds, meaning)
+    and may hold 1-D arrays, a batch of laws evaluated at once; the ripple tuples are
+    not parameters (their length is the number of orders).
+    """
+
+    starting_torque: float = param("breakaway level F_s", "N·m")
+    coulomb_torque: float = param("Coulomb level F_c after the Stribeck dip", "N·m")
+    viscous: float = param("viscous (churning) coefficient b", "N·m·s/rad")
+    stribeck_speed: float = param("Stribeck speed ω_s", "rad/s", positive=True)
+    velocity_scale: float = param("speed ω_ε of the smooth direction switch tanh(ω/ω_ε)", "rad/s",
+                                  positive=True, default=0.01)
     ripple_orders: tuple = ()      # k [-], orders of the WG angle
     ripple_amplitudes: tuple = ()  # r_k [-], relative to F_c
     ripple_phases: tuple = ()      # φ_k [rad]
-    coulomb_asymmetry: float = 0.0  # Δ [N·m]: forward level F_c + Δ, reverse F_c − Δ
-    load_coefficient: float = 0.0   # μ [-]: friction per unit of mesh torque on the WG shaft
+    coulomb_asymmetry: float = param("direction asymmetry Δ: forward level F_c + Δ, reverse F_c − Δ", "N·m",
+                                     -np.inf, default=0.0)
+    load_coefficient: float = param("mesh friction μ per unit of mesh torque on the WG shaft", "-", default=0.0)
+
+    prefix: ClassVar[str] = "input_friction"
 
     def __post_init__(self):
-        # NaN fails every comparison, so "not >= 0" refuses it; inf is refused by name
-        for name in ("starting_torque", "coulomb_torque", "viscous", "load_coefficient"):
-            value = np.asarray(getattr(self, name), dtype=float)
-            if not np.all((value >= 0.0) & (value < np.inf)):
-                raise InputError(f"input_friction.{name} must be a finite number >= 0")
-        for name in ("stribeck_speed", "velocity_scale"):
-            value = np.asarray(getattr(self, name), dtype=float)
-            if not np.all((value > 0.0) & (value < np.inf)):
-                raise InputError(f"input_friction.{name} must be a finite number > 0")
-        if not np.all(np.isfinite(np.asarray(self.coulomb_asymmetry, dtype=float))):
-            raise InputError("input_friction.coulomb_asymmetry must be a finite number")
+        # NaN fails every comparison and inf is refused by name: "finite" says which was wrong
+        for name, meta in self.param_meta().items():
+            value = _as_float_array(self.prefix, name, getattr(self, name))
+            lower = meta["bounds"][0]
+            ok = np.isfinite(value) & ((value > lower) if meta["positive"] else (value >= lower))
+            if not np.all(ok):
+                limit = "" if lower == -np.inf else f" {'>' if meta['positive'] else '>='} {lower:g}"
+                first = np.atleast_1d(value)[np.argmin(np.atleast_1d(ok))]
+                raise InputError(f"input_friction.{name} must be a finite number{limit}, got {first:g}")
         if not len(self.ripple_orders) == len(self.ripple_amplitudes) == len(self.ripple_phases):
             raise InputError("input_friction ripple_orders, ripple_amplitudes and ripple_phases "
                              "must have the same length")
         ripple = [*self.ripple_orders, *self.ripple_amplitudes, *self.ripple_phases]
-        if not np.all(np.isfinite(np.asarray(ripple, dtype=float))):
+        try:
+            finite = np.all(np.isfinite(np.asarray(ripple, dtype=float)))
+        except (TypeError, ValueError):
+            finite = False
+        if not finite:
             raise InputError("input_friction ripple_orders, ripple_amplitudes and ripple_phases "
                              "must be finite numbers")
+
+    @property
+    def batch_size(self) -> int:
+        """1 for one law, else the common length of its array parameters."""
+        sizes = {np.size(v) for v in self.params().values()} - {1}
+        return max(sizes, default=1)
+
+    def sample(self, m: int) -> "InputFriction":
+        """Law ``m`` of a batch (the law itself when it is a single one)."""
+        return replace(self, **{k: np.atleast_1d(v)[m] for k, v in self.params().items() if np.size(v) > 1})
 
     @property
     def dissipative(self) -> bool:
@@ -265,19 +292,101 @@ def catalog_values(model) -> dict:
             "source": "CSG-25-100 values scaled by rated torque", "status": "derived"}
 
 
-def for_unit(model, overrides: dict | None = None) -> InputFriction:
-    """The input friction of a model's unit, with a scenario's ``[input_friction]`` overrides.
+def catalog_friction(model) -> InputFriction:
+    """The catalog law of a model's unit: what a drive carries unless it is given another.
 
     Parameters
     ----------
     model : HarmonicDrive
-        The model whose catalog values are used (`catalog_values`).
+        The model; its name and rated torque select the catalog values (`catalog_values`).
+
+    Returns
+    -------
+    InputFriction
+        `from_catalog` of the unit's starting torque and running torque at 2000 rpm.
+    """
+    values = catalog_values(model)
+    return from_catalog(values["starting_torque"], values["running_torque_2000rpm"])
+
+
+#: keys of a scenario's [input_friction] table that re-derive F_s, F_c and b as `from_catalog` does
+_CATALOG_KEYS = ("starting_torque_Nm", "running_torque_Nm", "coulomb_share")
+#: keys that replace one field each: key -> (field, conversion to SI)
+_FIELD_KEYS = {"stribeck_speed_rpm": ("stribeck_speed", rpm_to_rad_per_s), "viscous_Nms": ("viscous", float),
+               "coulomb_asymmetry_Nm": ("coulomb_asymmetry", float), "load_coefficient": ("load_coefficient", float)}
+_RIPPLE_KEYS = ("ripple_orders", "ripple_amplitudes", "ripple_phases")
+TABLE_KEYS = ("model", *_CATALOG_KEYS, *_FIELD_KEYS, *_RIPPLE_KEYS)
+
+
+def _number_or_array(value):
+    """A float for a single value, the array for a batch (laws of a batch drive)."""
+    return float(value) if np.ndim(value) == 0 else np.asarray(value, dtype=float)
+
+
+def _catalog_changes(law: InputFriction, table: dict) -> dict:
+    """F_s, F_c and b from the table's catalog keys, each key left out taken from ``law``.
+
+    The law's Coulomb share is ``F_c/F_s`` (1 without breakaway excess) and its running
+    torque at 2000 rpm ``F_c + b·ω``; with none of the keys in the table nothing changes.
+    """
+    if not any(key in table for key in _CATALOG_KEYS):
+        return {}
+    F_s = np.asarray(table.get("starting_torque_Nm", law.starting_torque), dtype=float)
+    own = np.asarray(law.starting_torque, dtype=float)
+    share = table.get("coulomb_share",
+                      np.where(own > 0, np.asarray(law.coulomb_torque) / np.where(own > 0, own, 1.0), 1.0))
+    if not np.all((np.asarray(share) >= 0.0) & (np.asarray(share) <= 1.0)):
+        raise InputError("input_friction.coulomb_share must be in [0, 1]")
+    running = table.get("running_torque_Nm", np.asarray(law.coulomb_torque) + np.asarray(law.viscous) * CATALOG_SPEED)
+    F_c = share * F_s
+    # the running torque at 2000 rpm cannot be below the Coulomb level: no negative viscous loss
+    b = np.maximum(np.asarray(running, dtype=float) - F_c, 0.0) / CATALOG_SPEED
+    return {"starting_torque": _number_or_array(F_s), "coulomb_torque": _number_or_array(F_c),
+            "viscous": _number_or_array(b)}
+
+
+def apply_table(law: InputFriction, table: dict) -> InputFriction:
+    """A scenario's ``[input_friction]`` table (without its ``model`` key) applied on top of ``law``.
+
+    The catalog keys ``starting_torque_Nm`` [N·m], ``running_torque_Nm`` [N·m] (at 2000 rpm)
+    and ``coulomb_share`` [-] re-derive ``F_s``, ``F_c`` and ``b`` as `from_catalog` does,
+    a key left out keeping the law's own value; then ``stribeck_speed_rpm`` [rpm],
+    ``viscous_Nms`` [N·m·s/rad], ``coulomb_asymmetry_Nm`` [N·m], ``load_coefficient`` [-] and
+    the ripple lists ``ripple_orders`` [-], ``ripple_amplitudes`` [-], ``ripple_phases``
+    [rad] replace one field each. An empty table returns ``law`` itself.
+
+    Raises
+    ------
+    InputError
+        On an unknown key or a value out of range.
+    """
+    for key in table:
+        if key not in TABLE_KEYS[1:]:
+            raise unknown_name("input_friction key", key, TABLE_KEYS[1:])
+    changes = _catalog_changes(law, table)
+    for key, (name, convert) in _FIELD_KEYS.items():
+        if key in table:
+            changes[name] = convert(table[key])
+    for key in _RIPPLE_KEYS:
+        if key in table:
+            value = table[key]
+            if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
+                raise InputError(f"input_friction.{key} must be a list of numbers")
+            changes[key] = tuple(float(v) for v in value)
+    return law.with_updates(**changes) if changes else law
+
+
+def for_unit(model, overrides: dict | None = None) -> InputFriction:
+    """The input friction a driven scenario runs: the drive's law with the scenario's table on top.
+
+    Parameters
+    ----------
+    model : HarmonicDrive
+        The model; its ``input_friction`` is the law the table changes.
     overrides : dict, optional
-        ``model`` (``"catalog"`` or ``"none"``), ``starting_torque_Nm`` [N·m],
-        ``running_torque_Nm`` [N·m] (at 2000 rpm), ``coulomb_share`` [-],
-        ``stribeck_speed_rpm`` [rpm], ``viscous_Nms`` [N·m·s/rad], ``ripple_orders`` [-],
-        ``ripple_amplitudes`` [-], ``ripple_phases`` [rad], ``coulomb_asymmetry_Nm`` [N·m],
-        ``load_coefficient`` [-].
+        The scenario's ``[input_friction]`` table: ``model`` (``"drive"``, the default: the
+        drive's law; ``"catalog"``: the unit's catalog law, `catalog_friction`; ``"none"``:
+        no friction) and the keys of `apply_table`.
 
     Returns
     -------
@@ -287,44 +396,22 @@ def for_unit(model, overrides: dict | None = None) -> InputFriction:
     Raises
     ------
     InputError
-        On an unknown key or model, a value out of range, or a law that would deliver
-        power (ripple and asymmetry larger than the Coulomb level).
+        On an unknown key or model, a value out of range, or a table that makes a
+        dissipative law deliver power (ripple and asymmetry larger than the Coulomb level;
+        a drive's own law, a fitted one, may do so and runs as it is).
     """
     overrides = dict(overrides or {})
-    kind = overrides.pop("model", "catalog")
+    for key in overrides:
+        if key not in TABLE_KEYS:
+            raise unknown_name("input_friction key", key, TABLE_KEYS)
+    kind = overrides.pop("model", "drive")
     if kind == "none":
         return NO_INPUT_FRICTION
-    if kind != "catalog":
-        raise InputError(f"input_friction.model must be 'catalog' or 'none', got {kind!r}")
-    values = catalog_values(model)
-    shape = {}
-    if "coulomb_share" in overrides:
-        share = overrides.pop("coulomb_share")
-        if not 0.0 <= share <= 1.0:
-            raise InputError("input_friction.coulomb_share must be in [0, 1]")
-        shape["coulomb_share"] = share
-    if "stribeck_speed_rpm" in overrides:
-        shape["stribeck_speed"] = rpm_to_rad_per_s(overrides.pop("stribeck_speed_rpm"))
-    if "load_coefficient" in overrides:
-        shape["load_coefficient"] = float(overrides.pop("load_coefficient"))
-    for key in ("ripple_orders", "ripple_amplitudes", "ripple_phases"):
-        if key in overrides:
-            value = overrides.pop(key)
-            if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
-                raise InputError(f"input_friction.{key} must be a list of numbers")
-            shape[key] = [float(v) for v in value]
-    friction = from_catalog(overrides.pop("starting_torque_Nm", values["starting_torque"]),
-                            overrides.pop("running_torque_Nm", values["running_torque_2000rpm"]), **shape)
-    if "viscous_Nms" in overrides:
-        friction = friction.with_updates(viscous=float(overrides.pop("viscous_Nms")))
-    if "coulomb_asymmetry_Nm" in overrides:
-        friction = friction.with_updates(coulomb_asymmetry=float(overrides.pop("coulomb_asymmetry_Nm")))
-    if overrides:
-        raise unknown_name("input_friction key", next(iter(overrides)),
-                           ["model", "starting_torque_Nm", "running_torque_Nm", "coulomb_share",
-                            "stribeck_speed_rpm", "viscous_Nms", "ripple_orders", "ripple_amplitudes",
-                            "ripple_phases", "coulomb_asymmetry_Nm", "load_coefficient"])
-    if not friction.dissipative:
+    if kind not in ("drive", "catalog"):
+        raise InputError(f"input_friction.model must be 'drive', 'catalog' or 'none', got {kind!r}")
+    base = catalog_friction(model) if kind == "catalog" else model.input_friction
+    friction = apply_table(base, overrides)
+    if base.dissipative and not friction.dissipative:
         raise InputError("input_friction: the ripple amplitudes and the asymmetry must leave the Coulomb "
                          "level positive, F_c (1 - sum |r_k|) >= |asymmetry| (else the friction delivers power)")
     return friction

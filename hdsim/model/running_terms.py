@@ -27,7 +27,9 @@ running torque).
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
+from types import MappingProxyType
 from typing import ClassVar
 
 import numpy as np
@@ -88,6 +90,12 @@ class RunningTerm:
     id: ClassVar[str] = ""
     #: what the term looks like in a sweep (for reports)
     signature: ClassVar[str] = ""
+    # what a diagnosis knows of the family (as on `hdsim.model.effects.base.Effect`)
+    rate_partner: ClassVar[str] = ""
+    rate_dependent: ClassVar[bool] = False
+    #: other family -> the measurement that separates this family from it
+    separated_by: ClassVar[Mapping[str, str]] = MappingProxyType({})
+    separated_from_any: ClassVar[str] = ""
 
     def grid(self, speeds: np.ndarray) -> tuple[float, ...]:
         """Values of the term's non-linear parameter to try (``()``: none)."""
@@ -100,6 +108,13 @@ class RunningTerm:
     def write_back(self, law: InputFriction, coefficients: dict, nonlinear: float | None) -> InputFriction:
         """The law with this term's fitted amplitudes (``coefficients`` by column name)."""
         raise NotImplementedError
+
+    def holds(self, law: InputFriction, coefficients: dict) -> bool:
+        """True when `write_back` puts ``coefficients`` into ``law`` (the law with the terms
+        before this one written back) exactly. The columns span amplitudes the law may not
+        hold (a ripple on a level of 0); the fit then keeps a solution that it does hold
+        (`hdsim.identification.running_fit.fit_running`). Default: always."""
+        return True
 
     def other_shapes(self, speed, angle, velocity_scale: float, ratio: float, nonlinear) -> Columns | None:
         """Shapes of the same family that the law's form lacks (None: none).
@@ -136,6 +151,12 @@ class StribeckFriction(RunningTerm):
     family: ClassVar[str] = "friction"
     id: ClassVar[str] = "stribeck"
     signature: ClassVar[str] = "more torque at low speed; a level that depends on the direction"
+    separated_by: ClassVar[Mapping[str, str]] = MappingProxyType({
+        "damping": "a sweep over at least three speeds a decade apart: viscous loss grows with speed, a "
+                   "Stribeck rise falls with it",
+        "ripple": "longer plateaus (several wave-generator revolutions each): a ripple averages out over a "
+                  "revolution, a friction level does not",
+    })
 
     def grid(self, speeds):
         """Stribeck speeds from a fifth of the slowest to the fastest steady speed (log-spaced)."""
@@ -166,6 +187,10 @@ class ViscousLoss(RunningTerm):
     family: ClassVar[str] = "damping"
     id: ClassVar[str] = "viscous"
     signature: ClassVar[str] = "torque growing in proportion to speed"
+    separated_by: ClassVar[Mapping[str, str]] = MappingProxyType({
+        "ripple": "longer plateaus at several speeds: a ripple averages out over a revolution, a viscous loss "
+                  "grows with speed",
+    })
 
     def columns(self, speed, angle, velocity_scale, ratio, nonlinear):
         law = unit_law(velocity_scale, viscous=1.0)
@@ -218,6 +243,14 @@ class PositionRipple(RunningTerm):
             cols += [sign * np.cos(k * angle), sign * np.sin(k * angle)]
         return Columns(tuple(names), np.column_stack(cols), (-math.inf,) * 6, (math.inf,) * 6)
 
+    def holds(self, law, coefficients):
+        # the ripple modulates the level: on a level of 0 it is lost, on a level so small
+        # that the relative amplitude overflows it cannot be written
+        if not any(coefficients.values()):
+            return True
+        level = float(law.coulomb_torque)
+        return level > 0.0 and math.isfinite(sum(abs(a) for a in coefficients.values()) / level)
+
     def write_back(self, law, coefficients, nonlinear):
         level = law.coulomb_torque
         orders, amps, phases = [], [], []
@@ -235,9 +268,27 @@ class PositionRipple(RunningTerm):
 
 #: the base model of a running-torque test
 BASE_TERM = CoulombLevel()
-#: family -> term of a running-torque test
-RUNNING_FAMILIES: dict[str, RunningTerm] = {"friction": StribeckFriction(), "damping": ViscousLoss(),
-                                            "ripple": PositionRipple()}
+#: family -> term of a running-torque test (`register_running_term` adds one)
+RUNNING_FAMILIES: dict[str, RunningTerm] = {}
+
+
+def register_running_term(term: RunningTerm) -> RunningTerm:
+    """Make ``term`` the running-torque law's part of its family (as `hdsim.model.effects.register`
+    does for the elastic path's effects); a family registered again is replaced.
+
+    Raises
+    ------
+    InputError
+        A term without a family or id, or the base level's family.
+    """
+    if not term.family or not term.id or term.family == BASE_TERM.family:
+        raise InputError(f"{type(term).__name__} needs a family and an id other than the base level's")
+    RUNNING_FAMILIES[term.family] = term
+    return term
+
+
+for _term in (StribeckFriction(), ViscousLoss(), PositionRipple()):
+    register_running_term(_term)
 
 
 def parse_running_effects(text) -> list[str]:

@@ -2,7 +2,9 @@
 
 A driven scenario's tables (`hdsim.scenarios.driven_schema`, every key in
 docs/tutorial-kinematic-error.md) become a `hdsim.simulation.driven.Bench`: WG motion,
-load, speed loop, WG-shaft friction and output sampling, in SI. The runner integrates
+load, speed loop, WG-shaft friction (the drive's ``input_friction`` with the scenario's
+``[input_friction]`` table applied on top, `hdsim.model.input_friction.for_unit`) and
+output sampling, in SI. The runner integrates
 it in segments (`hdsim.simulation.solver.step_schedule`) and computes the metric groups
 the scenario lists (`hdsim.scenarios.driven_metrics`). Switches are the strings
 ``"yes"`` and ``"no"``; rpm, degrees and arcsec appear only in the scenario tables
@@ -196,6 +198,7 @@ def bench_from_scenario(model: HarmonicDrive, scenario) -> Bench:
                                                           allow_zero=True))
     elif ctl:
         raise InputError(f"{src}: [controller] applies to input.mode = \"pi\" only")
+    # the drive's own law (a fitted one included), the scenario's [input_friction] table on top
     friction = for_unit(model, data.get("input_friction"))
 
     t_end = max(motion.t_end, load.t_end)

@@ -109,11 +109,11 @@ def driven_metrics(model: HarmonicDrive, scenario, bench: Bench, result: Simulat
         elif group == "running_torque_sweep":
             out.update(_sweep_metrics(t, s["motor_torque_Nm"], windows, data))
         elif group == "starting_torque":
-            out["starting_torque_mNm"] = 1e3 * starting_torque(model, bench.input_friction)
+            out["starting_torque_mNm"] = 1e3 * _starting_torque(model, bench.input_friction)
         elif group == "backdriving_torque":
             # the output torque that starts the unloaded input turning: N F_break / (1 − μ), the mesh
             # term μ|τ|/N of the input friction growing with the torque that backdrives it
-            start = out.get("starting_torque_mNm", 1e3 * starting_torque(model, bench.input_friction)) / 1e3
+            start = out.get("starting_torque_mNm", 1e3 * _starting_torque(model, bench.input_friction)) / 1e3
             out["backdriving_torque_Nm"] = abs(N) * start / (1.0 - bench.input_friction.load_coefficient)
         elif group == "efficiency":
             table = data.get("efficiency", {})
@@ -159,6 +159,18 @@ def driven_metrics(model: HarmonicDrive, scenario, bench: Bench, result: Simulat
             out["oscillation_phase_deg"] = np.rad2deg(phase)
             out["oscillation_deviation_p2p_arcsec"] = rad_to_arcsec(p2p)
     return out
+
+
+def _starting_torque(model: HarmonicDrive, friction) -> np.ndarray:
+    """Starting torque [N·m] per sample, shape (M,).
+
+    The torque ramp is sized by the breakaway level, so a batch of friction laws (a study
+    of ``input_friction.*``) breaks away one law at a time; one law serves a whole batch.
+    """
+    if friction.batch_size == 1:
+        return starting_torque(model, friction)
+    return np.concatenate([starting_torque(sample_model(model, m), friction.sample(m))
+                           for m in range(friction.batch_size)])
 
 
 def _linear_metrics(model, scenario, bench, result, group, out):

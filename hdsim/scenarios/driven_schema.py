@@ -49,7 +49,7 @@ DRIVEN_SCHEMA = {
         "position_gain_per_s": float,  # outer position-loop gain (overrides the tuning)
     },
     "input_friction": {
-        "model": str,                # catalog | none
+        "model": str,                # drive (default: the drive's law, the keys below on top) | catalog | none
         "starting_torque_Nm": float,
         "running_torque_Nm": float,  # no-load running torque at 2000 rpm input
         "coulomb_share": float,

@@ -9,6 +9,8 @@ Layout of a run file (one run, or a batch of ``M`` runs)::
     /metrics/NAME    (M,)         in the units their names carry
     /params/NAME     (M,) or ()   dotted parameter names, SI
     /effects         attrs: family -> effect id
+    /input_friction  attrs: ripple_orders, ripple_amplitudes, ripple_phases (the law's lists;
+                     its scalar fields are in /params as input_friction.NAME)
     /scenario        attrs: toml (the scenario table as TOML text)
     /solver          attrs: method, rtol, nfev, ...
     /drive_file      attrs: toml, path (only for a unit read from a drive file)
@@ -30,7 +32,7 @@ import h5py
 import numpy as np
 import tomli_w
 
-from hdsim import __version__
+from hdsim._version import __version__
 from hdsim.atomic import atomic_path
 from hdsim.errors import InputError
 from hdsim.model.catalog import load_unit
@@ -75,6 +77,7 @@ def write_run_file(path, run) -> Path:
             for name, value in run.model.params().items():
                 g.create_dataset(name, data=np.asarray(value, dtype=float))
             f.create_group("effects").attrs.update({s: e.id for s, e in run.model.effects().items()})
+            f.create_group("input_friction").attrs.update(_ripple(run.model.input_friction))
             f.create_group("scenario").attrs["toml"] = tomli_w.dumps(run.scenario.data)
             f.create_group("solver").attrs.update({k: v for k, v in result.solver.items()})
             table = drive_table(run.model)
@@ -126,6 +129,7 @@ def read_run_file(path) -> tuple[HarmonicDrive, Scenario, SimulationResult, dict
             effects = {k: str(v) for k, v in f["effects"].attrs.items()}
             scenario_toml = str(f["scenario"].attrs["toml"])
             unit = str(attrs["unit"])
+            ripple = dict(f["input_friction"].attrs) if "input_friction" in f else {}
             drive_file = None
             if "drive_file" in f:
                 g = f["drive_file"]
@@ -133,8 +137,19 @@ def read_run_file(path) -> tuple[HarmonicDrive, Scenario, SimulationResult, dict
         except KeyError as exc:
             raise InputError(f"{path}: not an hdsim result file (missing {exc})") from None
     model = stored_model(unit, params, effects, drive_file)
+    if ripple:  # files written before the drive carried its input friction have none
+        model = model.with_input_friction(model.input_friction.with_updates(
+            **{k: tuple(float(v) for v in np.atleast_1d(ripple[k])) for k in _RIPPLE_FIELDS}))
     scenario = Scenario(tomllib.loads(scenario_toml), str(path))
     return model, scenario, result, metrics
+
+
+_RIPPLE_FIELDS = ("ripple_orders", "ripple_amplitudes", "ripple_phases")
+
+
+def _ripple(law) -> dict:
+    """The ripple lists of an input-friction law, as float arrays (HDF5 attributes)."""
+    return {k: np.asarray(getattr(law, k), dtype=float) for k in _RIPPLE_FIELDS}
 
 
 def stored_model(unit: str, params: dict, effects: dict, drive_file: tuple | None = None) -> HarmonicDrive:
@@ -143,7 +158,7 @@ def stored_model(unit: str, params: dict, effects: dict, drive_file: tuple | Non
     Parameters
     ----------
     unit : str
-        Name of a built-in unit (`hdsim.model.catalog.unit_names`).
+        Name of a built-in unit (`hdsim.model.datasheet.unit_names`).
     params : dict
         Dotted parameter name → value (SI), scalars or arrays of shape (M,).
     effects : dict

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hdsim import __version__
+from hdsim._version import __version__
 from hdsim.errors import unknown_name
 from hdsim.model.drive import HarmonicDrive
 from hdsim.scenarios.registry import get_setup

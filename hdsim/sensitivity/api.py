@@ -3,27 +3,33 @@
 The command ``hdsim sobol --unit …`` and this function run the same study
 (`hdsim.sensitivity.study.run_study` on `hdsim.sensitivity.scenario_outputs.model_function`);
 here the drive is an object, so a built-in unit, one changed with
-``with_updates``, or a fitted model all work. The method is described in
+``with_updates``, or a fitted model all work. Its inputs are typed, bounds are
+``(low, high)`` pairs, and its messages name them as Python spells them; the command
+line parses its text into the same values first. The method is described in
 docs/sensitivity.md.
 """
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Iterable, Mapping
 from concurrent.futures import Executor
 
 from hdsim.errors import InputError
 from hdsim.sensitivity.evaluate import open_executor
 from hdsim.sensitivity.models import from_unit
-from hdsim.sensitivity.problem import parse_range
+from hdsim.sensitivity.problem import PYTHON_WORDING, bounds_pair, parse_range
 from hdsim.sensitivity.study import StudyResult, run_study
-from hdsim.typing import Bounds, PathLike
+from hdsim.typing import PathLike
+
+#: explicit bounds of a study: parameter name -> (low, high) [SI unit of the parameter]
+TypedBounds = Mapping[str, tuple[float, float]]
 
 __all__ = ["sobol"]
 
 
-def sobol(drive, params: str | Iterable[str], output: str, *, scenario=None, n: int = 1024,
-          range: float | str | None = 0.1, bounds: Bounds | None = None,
+def sobol(drive, params: str | Iterable[str] | TypedBounds, output: str, *, scenario=None, n: int = 1024,
+          range: float | str | None = 0.1, bounds: TypedBounds | None = None,
           dists: Mapping[str, str] | None = None, second_order: bool = False,
           replicates: int = 4, seed: int = 0, executor: Executor | str | None = None,
           workers: int = 2, chunksize: int | None = None, out: PathLike | None = None,
@@ -38,9 +44,11 @@ def sobol(drive, params: str | Iterable[str], output: str, *, scenario=None, n: 
         changed with ``with_updates`` or ``with_effects``, a fitted model
         (``hdsim.identification.fit.load_fitted(path)``); or a built-in unit name or the
         path of a drive file.
-    params : str or iterable of str
-        Parameters to vary: dotted names (``"friction.slip_torque"``) or bare
-        flexspline dimensions (``"h_pz"``); a comma-separated string works too.
+    params : mapping, str or iterable of str
+        Parameters to vary: dotted names (``"friction.slip_torque"``,
+        ``"input_friction.coulomb_torque"``) or bare flexspline dimensions (``"h_pz"``);
+        a comma-separated string works too. A mapping ``{name: (low, high)}`` gives each
+        its bounds [SI unit of the parameter] (``None`` for a value: within ``range``).
     output : str
         The metric studied, e.g. ``"lost_motion_arcmin"`` (units in its name).
     scenario : Scenario, str or os.PathLike, optional
@@ -50,11 +58,11 @@ def sobol(drive, params: str | Iterable[str], output: str, *, scenario=None, n: 
         Base points N, a power of 2; the study evaluates N (D + 2) rows, or
         N (2D + 2) with ``second_order``.
     range : float or str, optional
-        Each parameter uniform within ±``range`` of its value in ``drive`` [-]
-        (``0.1`` or ``"10%"``); None to require ``bounds`` for every parameter.
+        Each parameter without bounds uniform within ±``range`` of its value in ``drive``
+        [-] (``0.1`` or ``"10%"``); None to require bounds for every parameter.
     bounds : mapping, optional
-        ``{name: (low, high)}`` [SI unit of the parameter] (or ``"LOW:HIGH"``); overrides
-        ``range`` for that parameter.
+        ``{name: (low, high)}`` [SI unit of the parameter], two finite numbers with
+        low < high, for parameters named in ``params``; overrides ``range`` for them.
     dists : mapping, optional
         ``{name: "unif" | "logunif" | "norm" | "norm:MEAN:SD"}``; default uniform.
     second_order : bool
@@ -94,8 +102,10 @@ def sobol(drive, params: str | Iterable[str], output: str, *, scenario=None, n: 
     Raises
     ------
     InputError
-        On an unknown parameter, output, unit or scenario, a bad file, range, bounds,
-        N or R, or an existing ``out`` without ``resume``.
+        On an unknown parameter (``unknown parameter 'x'``, naming the drive's close
+        matches), output, unit or scenario; bounds that are not ``(low, high)`` with
+        low < high or name a parameter not studied; a bad file, range, N or R, or an
+        existing ``out`` without ``resume``.
     hdsim.sensitivity.evaluate.ModelError
         When the simulation fails on every row tried.
 
@@ -105,15 +115,13 @@ def sobol(drive, params: str | Iterable[str], output: str, *, scenario=None, n: 
     >>> drive = hdsim.load_unit("CSG-25-100").with_updates({"backlash.gap": 2e-5})
     >>> result = hdsim.sobol(drive, ["h_pz", "h_c"], "lost_motion_arcmin", n=256)  # doctest: +SKIP
     >>> dict(zip(result.problem.names, result.analysis["ST"]))  # doctest: +SKIP
+    >>> hdsim.sobol(drive, {"h_c": (0.55e-3, 0.7e-3)}, "lost_motion_arcmin", n=256)  # doctest: +SKIP
     """
-    names = _names(params)
-    if not names:
-        raise InputError("sobol needs at least one parameter")
-    frac = parse_range(range) if isinstance(range, str) else range
-    if frac is not None and not 0 < frac < 10:
-        raise InputError(f"range must be a fraction in (0, 10), got {frac}")
-    func, problem, output, model, _ = from_unit(drive, names, output, scenario, frac,
-                                                _bounds_text(bounds), dict(dists or {}))
+    names, given = study_bounds(params, bounds)
+    frac = _fraction(range)
+    _check_names(drive, names)
+    func, problem, output, model, _ = from_unit(drive, names, output, scenario, frac, given,
+                                                dict(dists or {}), wording=PYTHON_WORDING)
     options = dict(seed=seed, second_order=second_order, replicates=replicates,
                    workers=workers, chunksize=chunksize, out=out, resume=resume,
                    retry_failed=retry_failed, target_width=target_width, model=model,
@@ -127,21 +135,63 @@ def sobol(drive, params: str | Iterable[str], output: str, *, scenario=None, n: 
     return result
 
 
-def _names(params) -> list[str]:
-    items = params.split(",") if isinstance(params, str) else list(params)
-    return [str(p).strip() for p in items if str(p).strip()]
+def study_bounds(params, bounds=None) -> tuple[list[str], dict[str, tuple[float, float]]]:
+    """The parameters of a study and their explicit bounds, checked.
 
+    Parameters
+    ----------
+    params : mapping, str or iterable of str
+        As `sobol`: names, or ``{name: (low, high) or None}``.
+    bounds : mapping, optional
+        ``{name: (low, high)}`` for names among ``params``.
 
-def _bounds_text(bounds) -> dict[str, str]:
-    """``{name: (lo, hi)}`` as the ``LO:HI`` text `build_problem` reads (repr is exact)."""
-    out = {}
+    Returns
+    -------
+    tuple
+        (names in study order, ``{name: (low, high)}`` [SI]).
+
+    Raises
+    ------
+    InputError
+        No parameter; bounds given twice, for a name not studied, or not ``(low, high)``
+        with low < high.
+    """
+    if isinstance(params, Mapping):
+        names = [str(name).strip() for name in params]
+        given = {str(name).strip(): value for name, value in params.items() if value is not None}
+    else:
+        items = params.split(",") if isinstance(params, str) else list(params)
+        names, given = [str(p).strip() for p in items if str(p).strip()], {}
+    if not names:
+        raise InputError("sobol needs at least one parameter")
     for name, value in dict(bounds or {}).items():
-        if isinstance(value, str):
-            out[name] = value
-            continue
+        if name not in names:
+            raise InputError(f"unknown parameter '{name}' in bounds: the study varies {', '.join(names)}")
+        if name in given:
+            raise InputError(f"bounds for '{name}' are given twice, in params and in bounds")
+        given[name] = value
+    return names, {name: bounds_pair(name, value) for name, value in given.items()}
+
+
+def _fraction(range) -> float | None:
+    """``range`` as a fraction in (0, 10): a number, or a percentage ``"10%"``; None as it is."""
+    if range is None:
+        return None
+    bad = InputError(f"range must be a fraction in (0, 10) such as 0.1, or a percentage such as '10%', "
+                     f"got {range!r}")
+    if isinstance(range, str):
         try:
-            lo, hi = (float(v) for v in value)
-        except (TypeError, ValueError):
-            raise InputError(f"bounds for '{name}' must be (low, high), got {value!r}") from None
-        out[name] = f"{lo!r}:{hi!r}"
-    return out
+            return parse_range(range)
+        except InputError:
+            raise bad from None
+    if isinstance(range, bool) or not isinstance(range, numbers.Real) or not 0 < range < 10:
+        raise bad  # NaN fails the comparison too
+    return float(range)
+
+
+def _check_names(drive, names) -> None:
+    """An unknown parameter is refused before anything else, with the drive's close matches."""
+    # the simulator's interface loads scipy's solvers: imported for drive studies only
+    from hdsim.sensitivity.scenario_outputs import as_drive, resolve_names
+
+    resolve_names(as_drive(drive), names)

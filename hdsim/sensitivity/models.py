@@ -11,10 +11,10 @@ import importlib
 
 from hdsim.errors import InputError
 from hdsim.sensitivity.functions import get_function
-from hdsim.sensitivity.problem import build_problem
+from hdsim.sensitivity.problem import CLI_WORDING, build_problem
 
 
-def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, dists=None):
+def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, dists=None, wording=None):
     """Study of a drive through the simulator: parameters by dotted name, ``output`` a metric.
 
     Parameters
@@ -29,8 +29,9 @@ def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, 
     scenario : Scenario, str or os.PathLike, optional
         A scenario, a built-in scenario name or a scenario file; default the built-in
         scenario producing ``output``.
-    range_frac, bounds, dists
-        As `hdsim.sensitivity.problem.build_problem`; nominal values come from the drive.
+    range_frac, bounds, dists, wording
+        As `hdsim.sensitivity.problem.build_problem` (``bounds`` typed, ``(low, high)``;
+        ``wording`` default the command line's); nominal values come from the drive.
 
     Returns
     -------
@@ -52,7 +53,7 @@ def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, 
     drive = batch.as_drive(unit)
     # nominal values only matter for --range
     nominal = {} if range_frac is None else batch.nominal_values(drive, list(names))
-    problem = build_problem(names, nominal, range_frac, bounds, dists)
+    problem = build_problem(names, nominal, range_frac, bounds, dists, wording or CLI_WORDING)
     # a built-in name travels as a name; anything else (a drive file too) as the model read
     # here, so the workers neither re-read a file nor depend on the working folder
     by_name = isinstance(unit, str) and "drive_file" not in drive.provenance

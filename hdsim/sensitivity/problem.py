@@ -2,7 +2,10 @@
 
 A `Problem` is the model-agnostic half of a Sobol study. It maps one-to-one
 onto SALib's problem dictionary (``names``, ``bounds``, ``dists``) and can be
-built from nominal values with ``--range 10%`` or from explicit ``--bounds``.
+built from nominal values with a range (``--range 10%``, ``range=0.1``) or from explicit
+bounds (``(low, high)`` per parameter). The command line parses its text into these
+(`parse_range`, `parse_bounds`); `build_problem` takes typed values and words its
+messages as the caller spells its options (`CLI_WORDING`, `PYTHON_WORDING`).
 
 Distributions (SALib names):
 
@@ -26,6 +29,24 @@ from hdsim.errors import InputError, unknown_name
 
 DISTS = ("unif", "logunif", "norm")
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+
+
+@dataclass(frozen=True)
+class Wording:
+    """How `build_problem`'s messages name the study's options: as the command line or the
+    Python API (`hdsim.sobol`) spells them. Templates take ``{name}`` (and ``{text}``)."""
+
+    bounds: str     # the bounds option, e.g. "--bounds"
+    dists: str      # the distributions option
+    range: str      # the range option, with how a value looks
+    bounds_of: str  # explicit bounds of one parameter
+    dist_of: str    # a distribution of one parameter, ``{text}`` its value
+    python: bool    # True: bounds are (low, high) pairs, checked with the API's wording
+
+
+CLI_WORDING = Wording("--bounds", "--dist", "--range P%", "--bounds {name}=LO:HI", "--dist {name}={text}", False)
+PYTHON_WORDING = Wording("bounds", "dists", "range=FRACTION", "bounds={{'{name}': (low, high)}}",
+                         "dists={{'{name}': '{text}'}}", True)
 
 
 @dataclass(frozen=True)
@@ -162,15 +183,57 @@ def parse_assignments(items, option: str) -> dict[str, str]:
 
 
 def parse_bounds(text: str, name: str) -> tuple[float, float]:
-    """``'0.5e-3:0.7e-3'`` -> ``(0.0005, 0.0007)``."""
+    """``'0.5e-3:0.7e-3'`` -> ``(0.0005, 0.0007)`` (the command line's ``--bounds NAME=LO:HI``)."""
     m = re.fullmatch(rf"({_NUMBER}):({_NUMBER})", text.replace(" ", ""))
     if not m:
         raise InputError(f"--bounds {name}= expects LO:HI (two numbers), got '{text}'")
     return float(m.group(1)), float(m.group(2))
 
 
-def build_problem(names, nominal=None, range_frac=None, bounds=None, dists=None) -> Problem:
-    """Build a `Problem` from nominal values and command-line style options.
+def parse_bounds_options(items) -> dict[str, tuple[float, float]]:
+    """``['a=1:2', 'b=3:4']`` -> ``{'a': (1.0, 2.0), 'b': (3.0, 4.0)}``: ``--bounds`` as typed bounds."""
+    return {name: parse_bounds(text, name) for name, text in parse_assignments(items, "--bounds").items()}
+
+
+def bounds_pair(name: str, value) -> tuple[float, float]:
+    """Typed bounds of one parameter: two finite numbers ``(low, high)`` with low < high.
+
+    Parameters
+    ----------
+    name : str
+        The parameter, for the message.
+    value : sequence of two numbers
+        ``(low, high)`` [SI unit of the parameter]; a tuple, list or array.
+
+    Returns
+    -------
+    tuple of float
+        ``(low, high)``.
+
+    Raises
+    ------
+    InputError
+        ``bounds for 'NAME' must be (low, high) with low < high, got …`` for text, a
+        boolean, a count other than two, a non-finite number or low >= high.
+    """
+    bad = InputError(f"bounds for '{name}' must be (low, high) with low < high, got {value!r}")
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__iter__"):
+        raise bad
+    items = list(value)
+    if len(items) != 2 or any(isinstance(v, (bool, np.bool_, str, bytes)) for v in items):
+        raise bad
+    try:
+        lo, hi = (float(v) for v in items)
+    except (TypeError, ValueError):
+        raise bad from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+        raise bad
+    return lo, hi
+
+
+def build_problem(names, nominal=None, range_frac=None, bounds=None, dists=None,
+                  wording: Wording = CLI_WORDING) -> Problem:
+    """Build a `Problem` from nominal values, a range, explicit bounds and distributions.
 
     Parameters
     ----------
@@ -182,9 +245,13 @@ def build_problem(names, nominal=None, range_frac=None, bounds=None, dists=None)
         Half-width as a fraction of ``|nominal|`` (``0.1`` for ``--range 10%``). For a
         ``norm`` input without explicit numbers it is the standard deviation instead.
     bounds : dict, optional
-        Name -> ``'LO:HI'`` text; overrides the range for that parameter.
+        Name -> ``(low, high)`` [SI]; overrides the range for that parameter. ``'LO:HI'``
+        text is read as ``--bounds`` reads it.
     dists : dict, optional
         Name -> ``'unif'``, ``'logunif'``, ``'norm'`` or ``'norm:MEAN:SD'``.
+    wording : Wording
+        How messages name the options (`CLI_WORDING`, `PYTHON_WORDING`); with
+        `PYTHON_WORDING` every pair is checked by `bounds_pair`.
 
     Returns
     -------
@@ -194,54 +261,75 @@ def build_problem(names, nominal=None, range_frac=None, bounds=None, dists=None)
     Raises
     ------
     InputError
-        On an option naming an unknown parameter, an unknown distribution, unreadable
-        bounds, or a parameter with neither bounds nor a usable nominal and range.
+        On an option naming a parameter the study does not vary, an unknown distribution,
+        unreadable bounds, or a parameter with neither bounds nor a usable nominal and range.
     """
     names = list(names)
     nominal, bounds, dists = dict(nominal or {}), dict(bounds or {}), dict(dists or {})
-    for option, given in (("--bounds", bounds), ("--dist", dists)):
+    for option, given in ((wording.bounds, bounds), (wording.dists, dists)):
         for name in given:
             if name not in names:
-                raise unknown_name(f"parameter in {option}", name, names)
+                raise _not_studied(name, option, names, wording)
     out_bounds, out_dists = [], []
     for name in names:
-        dist, explicit = _parse_dist(dists.get(name, "unif"), name)
+        dist, explicit = _parse_dist(dists.get(name, "unif"), name, wording)
         if explicit is None and name in bounds:
             if dist == "norm":  # LO:HI would silently become MEAN:SD in SALib
-                raise InputError(f"'{name}' is normal: give --dist {name}=norm:MEAN:SD "
-                                 f"instead of --bounds")
-            explicit = parse_bounds(bounds[name], name)
+                raise InputError(f"'{name}' is normal: give {wording.dist_of.format(name=name, text='norm:MEAN:SD')} "
+                                 f"instead of {wording.bounds}")
+            explicit = _explicit(name, bounds[name], wording)
         if explicit is None:
-            explicit = _from_range(name, nominal, range_frac, dist)
+            explicit = _from_range(name, nominal, range_frac, dist, wording)
         out_bounds.append(explicit)
         out_dists.append(dist)
     return Problem(tuple(names), tuple(out_bounds), tuple(out_dists))
 
 
-def _parse_dist(text: str, name: str):
+def _not_studied(name, option, names, wording) -> InputError:
+    if wording.python:
+        return InputError(f"unknown parameter '{name}' in {option}: the study varies {', '.join(names)}")
+    return unknown_name(f"parameter in {option}", name, names)
+
+
+def _explicit(name, value, wording) -> tuple[float, float]:
+    """One parameter's explicit bounds: text as ``--bounds`` reads it, a pair as given
+    (the API's pairs checked here; the command line's by `Problem` with its wording)."""
+    if isinstance(value, str) and not wording.python:
+        return parse_bounds(value, name)
+    if wording.python:
+        return bounds_pair(name, value)
+    lo, hi = value
+    return float(lo), float(hi)
+
+
+def _parse_dist(text: str, name: str, wording: Wording = CLI_WORDING):
+    if not isinstance(text, str):
+        raise InputError(f"{wording.dist_of.format(name=name, text=text)}: a distribution is one of "
+                         f"{', '.join(DISTS)} (or norm:MEAN:SD)")
     kind, _, rest = text.partition(":")
     if kind not in DISTS:
         raise unknown_name(f"distribution for '{name}'", kind, DISTS)
     if not rest:
         return kind, None
     if kind != "norm":
-        raise InputError(f"--dist {name}={text}: only 'norm' takes numbers (norm:MEAN:SD)")
+        raise InputError(f"{wording.dist_of.format(name=name, text=text)}: only 'norm' takes numbers "
+                         "(norm:MEAN:SD)")
     m = re.fullmatch(rf"({_NUMBER}):({_NUMBER})", rest.replace(" ", ""))
     if not m:
-        raise InputError(f"--dist {name}= expects norm:MEAN:SD, got '{text}'")
+        raise InputError(f"{wording.dist_of.format(name=name, text=text)}: expects norm:MEAN:SD (two numbers)")
     return kind, (float(m.group(1)), float(m.group(2)))
 
 
-def _from_range(name, nominal, frac, dist):
+def _from_range(name, nominal, frac, dist, wording: Wording = CLI_WORDING):
+    give = wording.bounds_of.format(name=name)
     if frac is None:
-        raise InputError(f"no bounds for '{name}': give --range P% or --bounds {name}=LO:HI")
+        raise InputError(f"no bounds for '{name}': give {wording.range} or {give}")
     if name not in nominal:
-        raise InputError(f"no nominal value for '{name}' to apply --range to; "
-                         f"give --bounds {name}=LO:HI")
+        raise InputError(f"no nominal value for '{name}' to apply {wording.range} to; give {give}")
     x0 = float(nominal[name])
     if x0 == 0 or not math.isfinite(x0):
         raise InputError(f"'{name}' has nominal {x0}: a ±% range needs a finite non-zero "
-                         f"nominal; give --bounds {name}=LO:HI")
+                         f"nominal; give {give}")
     if dist == "norm":
         return x0, abs(x0) * frac  # one standard deviation = the range
     lo, hi = sorted((x0 * (1 - frac), x0 * (1 + frac)))

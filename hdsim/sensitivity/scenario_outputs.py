@@ -35,6 +35,10 @@ METRIC_SCENARIOS = {
     "hysteresis_loss_arcmin": "stiffness", "lost_motion_centre_line_arcmin": "stiffness",
     "K1_Nm_per_rad": "stiffness", "K2_Nm_per_rad": "stiffness", "K3_Nm_per_rad": "stiffness",
     "transmission_accuracy_arcsec": "kinematic_error", "lost_motion_on_reversal_arcsec": "kinematic_error",
+    # the input friction's (`input_friction.*`): a friction sweep, breakaway and efficiency
+    "running_torque_forward_Nm": "running_torque", "running_torque_reverse_Nm": "running_torque",
+    "starting_torque_mNm": "running_torque", "backdriving_torque_Nm": "running_torque",
+    "efficiency_percent": "running_torque",
 }
 
 #: metrics need only the turning points and branch samples, so a coarse output grid is

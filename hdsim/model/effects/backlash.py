@@ -14,7 +14,9 @@ relaxes on its own while the output crosses the gap.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 from typing import ClassVar, Protocol
 
 import numpy as np
@@ -43,6 +45,12 @@ class Backlash(Effect):
     """Base of the backlash family; the "no effect" behaviour is a rigid connection."""
 
     family: ClassVar[str] = "backlash"
+    separated_by: ClassVar[Mapping[str, str]] = MappingProxyType({
+        "friction": "a small-amplitude cycle (±4 % T_N lost-motion test): backlash is a step of fixed width "
+                    "at zero torque, a friction loop shrinks with the amplitude",
+        "hardening": "a cycle to a larger torque and a small-amplitude cycle: hardening bends the curve at "
+                     "high load, backlash acts only at zero torque",
+    })
 
     def engage(self, twist):
         """(twist passed on by the dead zone [rad], contact factor 0…1)."""

@@ -18,7 +18,9 @@ name (`Effect.placeholder`).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, fields
+from types import MappingProxyType
 from typing import ClassVar
 
 import numpy as np
@@ -94,6 +96,19 @@ class Effect(Parameters):
     #: series with the spring and beside it)
     entry_forms: ClassVar[tuple[str, ...]] = ()
 
+    # what a diagnosis knows of the family, declared on the family's base class
+    #: the family a record at one loading rate cannot tell this one from: of such a pair,
+    #: one loss grows with the rate and the other does not ('' for none)
+    rate_partner: ClassVar[str] = ""
+    #: True for a family whose signature is its change with the loading rate, so that a
+    #: record at one rate cannot ask about it
+    rate_dependent: ClassVar[bool] = False
+    #: other family -> the measurement that separates this family from it (each pair is
+    #: written on one of its two families)
+    separated_by: ClassVar[Mapping[str, str]] = MappingProxyType({})
+    #: the measurement that separates this family from any other ('' for none)
+    separated_from_any: ClassVar[str] = ""
+
     @property
     def prefix(self) -> str:
         return self.family
@@ -122,6 +137,29 @@ class Effect(Parameters):
         fitted in the same lockstep and the lowest cost wins. Default: none.
         """
         return ()
+
+    def neutral_start(self, context: FitContext) -> dict | None:
+        """Free-parameter values ``{parameter: value}`` at which this effect does nothing.
+
+        A fit that adds this effect's family to a fitted model starts there too, so that it
+        never ends worse than the model it contains (`hdsim.identification.problem.make_problem`).
+        Default: the `neutral` instance's value of every free parameter; None when the
+        effect declares no neutral values or frees a parameter that is not one of its
+        fields (such an effect overrides this).
+        """
+        if self.is_null:
+            return {}
+        try:
+            neutral = type(self).neutral()
+        except NotImplementedError:
+            return None
+        fields_ = self.param_meta()
+        out = {}
+        for fp in self.free_parameters(context):
+            if fp.name not in fields_:
+                return None
+            out[fp.name] = float(np.asarray(getattr(neutral, fp.name), dtype=float).reshape(-1)[0])
+        return out
 
     def fit_updates(self, values: dict, engagement=None) -> dict:
         """Dotted model updates ``{"family.field": value}`` from fitted ``values``.

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 from typing import ClassVar
 
 import numpy as np
@@ -16,6 +18,13 @@ class Damping(Effect):
     """Base of the damping family: a viscous coefficient that may depend on the tangent stiffness."""
 
     family: ClassVar[str] = "damping"
+    rate_partner: ClassVar[str] = "friction"
+    rate_dependent: ClassVar[bool] = True
+    separated_by: ClassVar[Mapping[str, str]] = MappingProxyType({
+        "friction": "a second loading rate: a damping loop widens with the rate, a friction loop does not",
+        "backlash": "a second loading rate: backlash does not change with the rate, damping does",
+        "hardening": "a second loading rate: hardening does not change with the rate",
+    })
 
     def coefficient_at(self, tangent_ratio):
         """Damping coefficient [N·m·s/rad] where the tangent stiffness is ``tangent_ratio·K₀``."""

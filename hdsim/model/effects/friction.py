@@ -20,7 +20,9 @@ replace by closed forms.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 from functools import cached_property
 from typing import ClassVar
 
@@ -63,6 +65,11 @@ class Friction(Effect):
     """
 
     family: ClassVar[str] = "friction"
+    rate_partner: ClassVar[str] = "damping"
+    separated_by: ClassVar[Mapping[str, str]] = MappingProxyType({
+        "hardening": "unloading from several peak torques: a friction loop reverses at every peak, hardening "
+                     "follows one curve",
+    })
     #: sub-steps of the generic `advance`
     substeps: ClassVar[int] = 8
 
@@ -290,6 +297,10 @@ class CoulombFriction(_DahlLaw):
         t = context.max_torque
         start = float(np.clip(0.5 * context.stiffness * max(context.loop_width, 1e-5), 1e-3 * t, 0.5 * t))
         return (FreeParameter("torque", 0.0, 1e5, start),)
+
+    def neutral_start(self, context: FitContext):
+        # the fit frees the torque alone, with presliding fixed: no torque is no friction
+        return {"torque": 0.0}
 
     @classmethod
     def neutral(cls):

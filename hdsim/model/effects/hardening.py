@@ -180,6 +180,10 @@ class TanhHardening(Hardening):
         return (FreeParameter("curvature", 0.0, np.inf, 3.0 / (0.6 * t) ** 2),
                 FreeParameter("T_s", MIN_FIRST_BREAKPOINT * t, np.inf, 0.6 * t))
 
+    def neutral_start(self, context: FitContext):
+        # the fit frees the curvature, not e_inf: a zero curvature is a ratio of 1 at any T_s
+        return {"curvature": 0.0, "T_s": self.free_parameters(context)[1].start}
+
     def stiffness_ratio(self, values):
         ratio = np.clip(1.0 + np.asarray(values["curvature"], dtype=float)
                         * np.asarray(values["T_s"], dtype=float) ** 2, *self.ratio_bounds)

@@ -18,6 +18,9 @@ class KinematicError(Effect):
     """Base of the kinematic-error family: ``e(θ_w, θ_o, f)`` [rad], ``f = T/T_N``."""
 
     family: ClassVar[str] = "kinematic_error"
+    separated_from_any: ClassVar[str] = (
+        "a kinematic-error test over several output revolutions at constant load: the kinematic error "
+        "repeats with the wave-generator angle, the other does not")
     #: step of the central differences of the default partial derivatives [rad] and [-]
     difference_step: ClassVar[float] = 1e-6
 

@@ -1,0 +1,231 @@
+"""Test kinds: what each bench test brings to the one identification engine.
+
+A test kind is registered once, the way effects are (`register_test_kind`), and
+everything that differs between tests comes from it: the families it can show and the
+class that holds each family's knowledge (rate partner, the measurement that separates
+two families), its fit, its session (how a candidate is fitted, scored and held out),
+its acceptance thresholds, its plausibility checks against the datasheet, what keeps a
+record from deciding, its report, and its error unit. The engine
+(`hdsim.identification.engine`), the policy (`hdsim.identification.policy`) and the
+workflow (`hdsim.identification.workflow`) ask the kind and never the test's name.
+
+The built-in kinds are ``stiffness`` and ``kinematic_error``
+(`hdsim.identification.diagnosis`) and ``running_torque``
+(`hdsim.identification.running_diagnosis`). A user's kind derives from `TestKind`,
+declares the measurement columns it reads (``columns``) and is registered; see
+``docs/architecture.md`` and ``tests/test_test_kind_plugin.py`` for one written in a
+test file and diagnosed end to end.
+
+A session (`TestKind.session`) is the kind's state for one record. The engine reads:
+``measurement``, ``chosen`` (family -> effect id of the baseline), ``one_rate``,
+``fold_rule``, ``passes``, and calls ``baseline()``, ``entry_forms(family)``,
+``try_models(step, trials, residual)``, ``other_forms(current, done)``,
+``explained(step)``, ``confidence(steps)`` and ``findings(step)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from types import MappingProxyType
+from typing import ClassVar
+
+from hdsim.errors import InputError, unknown_name
+from hdsim.identification.engine import run_diagnosis
+from hdsim.identification.policy import Thresholds
+
+__all__ = ["TestKind", "FamilyKnowledge", "register_test_kind", "unregister_test_kind", "test_kind", "test_kinds"]
+
+#: test name -> registered kind
+_KINDS: dict[str, "TestKind"] = {}
+
+
+class FamilyKnowledge:
+    """What a diagnosis knows of a family, for a kind whose families are not effects of the
+    elastic path (`hdsim.model.effects.base.Effect`) or running-torque terms
+    (`hdsim.model.running_terms.RunningTerm`), which declare the same attributes."""
+
+    #: the family a record at one loading rate cannot tell this one from ('' for none)
+    rate_partner: ClassVar[str] = ""
+    #: its signature is its change with the loading rate
+    rate_dependent: ClassVar[bool] = False
+    #: other family -> the measurement that separates this family from it
+    separated_by: ClassVar[Mapping[str, str]] = MappingProxyType({})
+    #: the measurement that separates this family from any other ('' for none)
+    separated_from_any: ClassVar[str] = ""
+
+
+class TestKind:
+    """Base of the test kinds: the defaults every kind may keep."""
+
+    __test__ = False  # not a pytest test class, whatever its name says
+
+    #: the ``# test:`` name of the records this kind reads
+    name: ClassVar[str] = ""
+    #: unit of the fit error, and its JSON key
+    error_unit: ClassVar[str] = "rad"
+    error_key: ClassVar[str] = "rmse_rad"
+    #: the acceptance and tie thresholds of this kind
+    thresholds: ClassVar[Thresholds] = Thresholds()
+    #: the fits run faster with numba's compiled evaluator (``pip install 'hdsim[fast]'``)
+    compiled_fits: ClassVar[bool] = False
+    #: the engine stops before a round when the residual is white
+    stop_when_white: ClassVar[bool] = True
+    #: measurement columns: required, and optional (for a kind the file reader does not know)
+    columns: ClassVar[tuple[str, ...]] = ()
+    optional_columns: ClassVar[tuple[str, ...]] = ()
+
+    # ------------------------------------------------------------------ families
+    def families(self) -> Mapping[str, type]:
+        """Family -> the class holding its knowledge (``rate_partner``, ``separated_by`` …),
+        in the order a model lists them; every family the test can show."""
+        raise NotImplementedError
+
+    def ordered(self, current: Mapping[str, str]) -> list[str]:
+        """The families of ``current`` in the kind's order."""
+        return [f for f in self.families() if f in current]
+
+    def rate_partner(self, family: str) -> str:
+        """The family one loading rate cannot tell ``family`` from ('' for none)."""
+        cls = self.families().get(family)
+        return getattr(cls, "rate_partner", "") if cls is not None else ""
+
+    def rate_dependent(self, family: str) -> bool:
+        cls = self.families().get(family)
+        return bool(getattr(cls, "rate_dependent", False))
+
+    def separating(self, a: str, b: str) -> str:
+        """The measurement that separates families ``a`` and ``b`` (each pair written once,
+        on either family's class, or a family's ``separated_from_any``)."""
+        known = self.families()
+        for one, other in ((a, b), (b, a)):
+            cls = known.get(one)
+            text = cls and (cls.separated_by.get(other) or cls.separated_from_any)
+            if text:
+                return text
+        return "a test at another loading rate and amplitude"
+
+    def keeps_entry(self, entry: dict, kept: list) -> bool:
+        """Whether an ambiguous entry is reported beside those already ``kept``."""
+        return True
+
+    # ------------------------------------------------------------------ fitting
+    def parse_effects(self, effects):
+        """The baseline's families from the user's text, list or dict."""
+        raise NotImplementedError
+
+    def fit(self, meas, effects=None, *, unit=None):
+        """The model with ``effects`` fitted to ``meas`` (a result with ``.summary()``)."""
+        raise NotImplementedError
+
+    def fit_summary(self, result, stem, scale) -> dict:
+        """What ``hdsim fit --json`` prints of ``result`` (``stem``: the path, less its suffix,
+        beside which figures of the fit may be written)."""
+        return result.summary()
+
+    def session(self, meas, chosen, *, unit=None, candidates=None, max_steps=None):
+        """The kind's state for one record (see the module text)."""
+        raise NotImplementedError
+
+    def diagnose(self, meas, effects=None, *, unit=None, families=None, candidates=None,
+                 max_rounds=None, max_steps=None, log=None):
+        """Greedy forward selection of the families ``meas`` needs beyond ``effects``."""
+        chosen = self.parse_effects(effects)
+        pool = list(families) if families is not None else list(self.families())
+        for family in pool:
+            if family not in self.families():
+                raise InputError(f"a {self.name} test cannot show the {family} family")
+        session = self.session(meas, chosen, unit=unit, candidates=candidates, max_steps=max_steps)
+        return run_diagnosis(self, session, pool, max_rounds=max_rounds, log=log)
+
+    # ------------------------------------------------------------------ reporting
+    def fit_errors(self, fit) -> dict:
+        """The fit's error figures under the kind's keys (rms first)."""
+        raise NotImplementedError
+
+    def fit_json(self, fit) -> dict:
+        """What the diagnosis JSON's ``final`` says of the fitted model beside its errors."""
+        return {}
+
+    def step_figures(self, step) -> dict:
+        """Figures of a step for the before/after table beside its errors."""
+        return {}
+
+    def diagnosis_json(self, diagnosis) -> dict:
+        """Keys the kind adds to the diagnosis JSON."""
+        return {}
+
+    def verdict(self, whiteness: dict) -> str:
+        if whiteness["explained"]:
+            return (f"explained: the residual is at the noise level "
+                    f"(rms {whiteness['rms_over_noise']:.2f}× the noise floor)")
+        return (f"residual not white (Ljung-Box p = {whiteness['p_value']:.2g}, rms "
+                f"{whiteness['rms_over_noise']:.1f}× the noise floor): the model still misses an effect "
+                "that no family in the library explains, or explains only in part; this is not a success")
+
+    def checks(self, meas, scale) -> tuple[list, dict]:
+        """The model-free checks of a record (`hdsim.io.data_checks.Check`) and the figures
+        of its data summary (none by default)."""
+        return [], {}
+
+    def plausibility(self, fit, scale) -> list[dict]:
+        """Fitted values against the datasheet, as checks (none by default)."""
+        return []
+
+    def limits(self, diagnosis_json: dict, data: dict, ranking: list) -> list[str]:
+        """What kept the record from deciding, each as the measurement that would."""
+        return [pair["measurement"] for pair in diagnosis_json.get("ambiguous", []) if pair.get("measurement")]
+
+    def unexplained(self) -> str:
+        """What to record when the residual keeps a structure no family explains."""
+        return ("the residual keeps a structure that no family of the library explains on this record: look "
+                "at the residual against time in the report")
+
+    def write_report(self, diagnosis, directory, summary: dict, scale):
+        """Write the report page of ``diagnosis`` into ``directory`` (``summary``: its JSON;
+        ``scale``: the drive's datasheet numbers); returns the page's path."""
+        raise InputError(f"no report is written for a {self.name} test")
+
+
+def register_test_kind(kind: TestKind) -> TestKind:
+    """Make ``kind`` the one that reads records of its test name (a kind registered again
+    under the same name replaces it). Its columns are told to the file reader when it
+    names them.
+
+    Raises
+    ------
+    InputError
+        A kind without a name.
+    """
+    if not kind.name:
+        raise InputError(f"{type(kind).__name__} needs a test name")
+    if kind.columns:
+        from hdsim.io.measurement_checks import register_test_columns
+
+        register_test_columns(kind.name, kind.columns, kind.optional_columns)
+    _KINDS[kind.name] = kind
+    return kind
+
+
+def unregister_test_kind(name: str) -> None:
+    """Remove a kind registered with `register_test_kind` (and its columns)."""
+    kind = _KINDS.pop(name, None)
+    if kind is not None and kind.columns:
+        from hdsim.io.measurement_checks import unregister_test_columns
+
+        unregister_test_columns(name)
+
+
+def test_kind(name: str) -> TestKind:
+    """The kind registered for the test ``name``; InputError with the known names."""
+    if name not in _KINDS:
+        raise unknown_name("test", name, _KINDS)
+    return _KINDS[name]
+
+
+def test_kinds() -> dict[str, TestKind]:
+    """Every registered kind by test name."""
+    return dict(_KINDS)
+
+
+test_kind.__test__ = False  # a function pytest must not collect when a test module imports it
+test_kinds.__test__ = False

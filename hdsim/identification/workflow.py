@@ -1,0 +1,182 @@
+"""The bench workflow, whole, for every test kind: data checks, fit or diagnosis, outcome,
+plausibility against the datasheet, report.
+
+``hdsim fit`` and ``hdsim diagnose`` only parse their arguments and format what these
+functions return; from Python the same result comes with everything the command prints::
+
+    import hdsim
+
+    meas = hdsim.load_measurement("bench.csv")
+    result = hdsim.diagnose(meas, effects="friction")
+    print(result.outcome, result.added, result.next_measurement)
+    result.report("diagnosis/")          # index.html with the figures
+    json_text = result.to_json()         # exactly what `hdsim diagnose --json` prints
+
+The tutorial ``docs/tutorial-find-missing-effect.md`` walks through it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from hdsim.identification import diagnosis as _builtin_kinds  # noqa: F401  (registers the built-in kinds)
+from hdsim.identification.outcome import assess
+from hdsim.identification.test_kinds import TestKind, test_kind
+from hdsim.io.data_checks import DriveScale, import_checks, wrong_test
+from hdsim.io.measurement import Measurement
+from hdsim.model.catalog import load_unit
+
+__all__ = ["diagnose", "fit", "BenchDiagnosis", "WrongTest", "examine_record", "test_kind"]
+
+
+def examine_record(meas: Measurement, unit=None) -> tuple[list[dict], dict, str, DriveScale]:
+    """(checks as JSON objects, data summary, wrong-test sentence or '', the drive's
+    `hdsim.io.data_checks.DriveScale`) of a record against the named drive."""
+    drive = unit if unit is not None and not isinstance(unit, str) else load_unit(unit)
+    scale = DriveScale.of(drive)
+    checks, figures = test_kind(meas.test).checks(meas, scale)
+    checks = import_checks(meas) + list(checks)
+    data = {"rows": len(meas), "dropped_rows": meas.rows.dropped_rows, **figures}
+    return [c.to_json() for c in checks], data, wrong_test(checks), scale
+
+
+@dataclass
+class BenchDiagnosis:
+    """A finished diagnosis with what the record allows to conclude from it.
+
+    Attributes
+    ----------
+    diagnosis : hdsim.identification.engine.Diagnosis
+        The rounds, candidates and fits.
+    outcome : str
+        ``found``, ``improved``, ``nothing_missing`` or ``cannot_decide``
+        (`hdsim.identification.outcome`).
+    next_measurement : str
+        What to record so that the record can decide ('' when nothing more is needed).
+    checks : list of dict
+        The data checks and the plausibility of the final fit against the datasheet.
+    data : dict
+        The data summary of the checks (rows, noise floors, reversals, loading rates).
+    """
+
+    diagnosis: object
+    kind: TestKind
+    outcome: str
+    next_measurement: str
+    checks: list
+    data: dict
+    scale: DriveScale
+    report_path: Path | None = None
+
+    @property
+    def added(self) -> list:
+        return list(self.diagnosis.added)
+
+    @property
+    def ranking(self) -> list:
+        return self.diagnosis.ranking
+
+    @property
+    def final(self):
+        return self.diagnosis.final
+
+    @property
+    def measurement(self) -> Measurement:
+        return self.diagnosis.measurement
+
+    def __getattr__(self, name):
+        # everything else of the engine's result (steps, ambiguous, whiteness, table …)
+        if name == "diagnosis":
+            raise AttributeError(name)
+        return getattr(self.diagnosis, name)
+
+    def to_json(self) -> dict:
+        """The object ``hdsim diagnose --json`` prints (docs/cli.md)."""
+        out = self.diagnosis.to_json()
+        out.update(outcome=self.outcome, next_measurement=self.next_measurement, checks=list(self.checks),
+                   data=dict(self.data))
+        if self.report_path is not None:
+            out["report"] = str(self.report_path)
+        return out
+
+    def report(self, directory) -> Path:
+        """Write the report (``index.html``, ``index.md`` and the figures) into ``directory``."""
+        summary = self.to_json()
+        self.report_path = Path(self.kind.write_report(self.diagnosis, directory, summary, self.scale))
+        return self.report_path
+
+
+@dataclass
+class WrongTest:
+    """A record that is not the test it claims: nothing is fitted, the checks say what it looks like."""
+
+    measurement: Measurement
+    reason: str
+    checks: list
+    data: dict
+    outcome: str = "wrong_test"
+    next_measurement: str = ""
+    added: list = field(default_factory=list)
+    ranking: list = field(default_factory=list)
+    report_path: Path | None = None
+
+    def to_json(self) -> dict:
+        out = {"test": self.measurement.test, "outcome": self.outcome, "checks": list(self.checks),
+               "data": dict(self.data), "next_measurement": "", "baseline": None, "ranking": [], "added": [],
+               "final": None, "ambiguous": [], "verdict": f"not a {self.measurement.test} test: {self.reason}"}
+        if self.report_path is not None:
+            out["report"] = str(self.report_path)
+        return out
+
+    def report(self, directory) -> Path:
+        """Write a page that says why nothing was fitted (``index.html`` and ``index.md``)."""
+        from hdsim.identification.report_page import write_wrong_test_report
+
+        self.report_path = write_wrong_test_report(self.measurement, directory, self.to_json())
+        return self.report_path
+
+
+def diagnose(measurement: Measurement, effects=None, *, unit=None, families=None, candidates: dict | None = None,
+             max_rounds: int | None = None, max_steps: int | None = None, log=None):
+    """Check a record, find the effect families it needs beyond ``effects``, and say what
+    the record allows to conclude.
+
+    Parameters
+    ----------
+    measurement : Measurement
+        From `hdsim.load_measurement`, of any registered test kind.
+    effects : str, list or dict, optional
+        The families the model already has (the baseline).
+    unit : str or HarmonicDrive, optional
+        The drive (default: the catalog default); its datasheet is the plausibility reference.
+    families, candidates, max_rounds, max_steps, log
+        As for `hdsim.identification.diagnosis.diagnose`.
+
+    Returns
+    -------
+    BenchDiagnosis or WrongTest
+        ``.outcome``, ``.checks``, ``.next_measurement``, ``.added``, ``.ranking``,
+        ``.to_json()`` and ``.report(directory)``; a `WrongTest` (outcome
+        ``wrong_test``) when the record is not the test it claims.
+    """
+    kind = test_kind(measurement.test)
+    checks, data, wrong, scale = examine_record(measurement, unit)
+    if wrong:
+        return WrongTest(measurement, wrong, checks, data)
+    result = kind.diagnose(measurement, effects, unit=unit, families=families, candidates=candidates,
+                           max_rounds=max_rounds, max_steps=max_steps, log=log)
+    outcome, next_measurement = assess(result.to_json(), data, kind)
+    checks = checks + kind.plausibility(result.final.fit, scale)
+    return BenchDiagnosis(result, kind, outcome, next_measurement, checks, data, scale)
+
+
+def fit(measurement: Measurement, effects=None, *, unit=None):
+    """Fit the model with ``effects`` to a record of any test kind.
+
+    Returns the kind's fit result (`hdsim.identification.fit.FitResult` for the twist
+    tests, `hdsim.identification.running_fit.RunningFit` for a running-torque sweep); its
+    ``.drive`` is the `HarmonicDrive` carrying everything fitted, which `run_scenario`
+    and `sobol` take as it is.
+    """
+    return test_kind(measurement.test).fit(measurement, effects, unit=unit)

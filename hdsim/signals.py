@@ -1,0 +1,128 @@
+"""Signal analysis of a bench record, model-free: noise, turning points, loading direction and rates.
+
+Pure numpy functions on arrays, used by the checks of a record (`hdsim.io.data_checks`,
+`hdsim.io.running_checks`) and by the identification that fits it (its residual views,
+hold-out folds and running-torque fit). They know nothing of a drive or a file, so they
+sit at the bottom of the layers with `hdsim.units`.
+
+Noise is estimated from the data alone: the record minus its local cubic fit over seven
+samples (a Savitzky-Golay filter) keeps the white noise and removes any signal smooth
+over seven samples, curvature included (plain second differences read the curvature of
+a coarsely sampled cycle as noise). For white noise of rms σ that residual has rms
+``σ √(1 − h₀)``, h₀ the filter's centre weight (1/3); its median absolute value over
+0.6745 makes the estimate robust to the few steps (reversals, stick-slip) a record has.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["NOISE_WINDOW", "RATE_STEP", "local_cubic_weights", "noise_level", "smoothed", "turning_points",
+           "torque_legs", "loading_direction", "loading_rates", "rate_groups"]
+
+#: samples of the local cubic fit that the noise estimate subtracts
+NOISE_WINDOW = 7
+#: two loading rates are distinct when they differ by more than this factor
+RATE_STEP = 1.5
+
+
+def local_cubic_weights(window: int) -> np.ndarray:
+    """Weights that give the centre value of a least-squares cubic through ``window``
+    samples (the Savitzky–Golay smoothing coefficients; Savitzky & Golay, 1964): the first
+    row of the Vandermonde matrix's pseudo-inverse. Written out because importing
+    ``scipy.signal`` for them costs about a second on every ``fit`` and ``diagnose``."""
+    offsets = np.arange(window) - window // 2
+    return np.linalg.pinv(np.vander(offsets, 4, increasing=True))[0]
+
+
+def noise_level(x) -> float:
+    """Rms of the white noise on a signal, estimated without a model (module text) [unit of x]."""
+    x = np.asarray(x, dtype=float)
+    if x.size < NOISE_WINDOW:
+        return 0.0
+    weights = local_cubic_weights(NOISE_WINDOW)
+    half = NOISE_WINDOW // 2
+    # centred windows only: the median of |residual| does not miss the few edge samples
+    residual = x[half:x.size - half] - np.convolve(x, weights[::-1], mode="valid")
+    # white noise of rms σ leaves σ²(1 − w₀) in x minus its local fit (w₀ the centre weight)
+    return float(np.median(np.abs(residual)) / 0.6745 / math.sqrt(1.0 - weights[half]))
+
+
+def smoothed(x, noise: float) -> tuple[np.ndarray, float]:
+    """``x`` through a centred moving average long enough to bring ``noise`` well under its
+    swing, and the noise left on it (``noise / √width``) [unit of x]."""
+    x = np.asarray(x, dtype=float)
+    swing = max(float(np.ptp(x)), 1e-300)
+    # the window's noise is noise/√w; aim at 1 % of the swing, within 1 … n/50 samples
+    w = int(min(max((noise / (0.01 * swing)) ** 2, 1.0), max(x.size // 50, 1)))
+    width = 2 * (w // 2) + 1
+    if width <= 1:
+        return x.copy(), noise
+    padded = np.pad(x, width // 2, mode="edge")
+    return np.convolve(padded, np.ones(width) / width, mode="valid"), noise / math.sqrt(width)
+
+
+def turning_points(x, band: float) -> list[int]:
+    """Indices where ``x`` turns back by more than ``band`` [unit of x] (a dead band ignores
+    noise wiggles).
+
+    Returns the first index, every turning point and ``len(x)``.
+    """
+    x = np.asarray(x, dtype=float)
+    turns, direction = [0], 0
+    extreme, extreme_i = x[0], 0
+    for i in range(1, x.size):
+        v = x[i]
+        if direction == 0:
+            if abs(v - x[0]) > band:
+                direction, extreme, extreme_i = (1 if v > x[0] else -1), v, i
+        elif direction * (v - extreme) > 0:
+            extreme, extreme_i = v, i
+        elif direction * (extreme - v) > band:
+            turns.append(extreme_i)
+            direction, extreme, extreme_i = -direction, v, i
+    turns.append(x.size)
+    return turns
+
+
+def torque_legs(torque) -> tuple[np.ndarray, list[int]]:
+    """The smoothed torque [N·m] and its turning points (`turning_points`), with a dead band set
+    by the torque's own noise: five times the noise left after smoothing, at least 2 % of
+    the swing, so the noise of a torque computed from motor current does not turn a leg."""
+    T = np.asarray(torque, dtype=float)
+    smooth, left = smoothed(T, noise_level(T))
+    band = max(5.0 * left, 0.02 * float(np.ptp(smooth)), 1e-12)
+    return smooth, turning_points(smooth, band)
+
+
+def loading_direction(time, torque) -> tuple[np.ndarray, np.ndarray]:
+    """(sign, magnitude) of the loading at each sample: +1 loading up, −1 down, the sign of
+    the leg between turning points (`torque_legs`), and |dT/dt| of the smoothed torque [N·m/s]."""
+    smooth, turns = torque_legs(torque)
+    sign = np.zeros(smooth.size)
+    for a, b in zip(turns[:-1], turns[1:]):
+        sign[a:b] = np.sign(smooth[b - 1] - smooth[a]) if b - a > 1 else 0.0
+    return sign, np.abs(np.gradient(smooth, np.asarray(time, dtype=float)))
+
+
+def loading_rates(time, smooth_torque, turns) -> np.ndarray:
+    """Mean |dT/dt| [N·m/s] of each monotone leg between turning points (legs of more than
+    two samples that take time)."""
+    t = np.asarray(time, dtype=float)
+    rates = []
+    for a, b in zip(turns[:-1], turns[1:]):
+        if b - a > 2 and t[b - 1] > t[a]:
+            rates.append(abs(smooth_torque[b - 1] - smooth_torque[a]) / (t[b - 1] - t[a]))
+    return np.array(rates)
+
+
+def rate_groups(values, step: float = RATE_STEP) -> list[float]:
+    """The median of each group ``values`` fall in, neighbours within a factor ``step`` being
+    one group [unit of values]; values ≤ 0 are left out."""
+    v = np.sort(np.asarray(values, dtype=float)[np.asarray(values) > 0])
+    if v.size == 0:
+        return []
+    cuts = np.flatnonzero(np.diff(np.log(v)) > math.log(step)) + 1
+    return [float(np.median(g)) for g in np.split(v, cuts)]

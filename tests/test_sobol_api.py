@@ -1,0 +1,84 @@
+"""`hdsim.sobol` takes typed bounds and words its errors as Python does; only the CLI parses text.
+
+Every case here is refused (or its problem built) before a simulation runs, so the file
+takes a fraction of a second.
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+import hdsim
+from hdsim.errors import InputError
+from hdsim.sensitivity.api import study_bounds
+from hdsim.sensitivity.models import from_unit
+from hdsim.sensitivity.problem import PYTHON_WORDING, bounds_pair, parse_bounds_options
+
+OUTPUT = "lost_motion_arcmin"
+
+
+@pytest.fixture(scope="module")
+def drive():
+    return hdsim.load_unit("CSG-25-100")
+
+
+def test_a_mapping_of_typed_bounds_is_the_study(drive):
+    names, bounds = study_bounds({"h_pz": (0.5e-3, 0.7e-3), "input_friction.viscous": None, "h_c": [5e-4, 7e-4]})
+    assert names == ["h_pz", "input_friction.viscous", "h_c"]
+    assert bounds == {"h_pz": (0.5e-3, 0.7e-3), "h_c": (5e-4, 7e-4)}  # None: within the range
+    assert study_bounds("h_pz, h_c", {"h_c": (5e-4, 7e-4)}) == (["h_pz", "h_c"], {"h_c": (5e-4, 7e-4)})
+
+
+def test_the_cli_text_and_the_typed_bounds_build_the_same_problem():
+    typed = from_unit("CSG-25-100", ["h_pz", "h_c"], OUTPUT, None, 0.1, {"h_pz": (0.5e-3, 0.7e-3)}, {},
+                      wording=PYTHON_WORDING)[1]
+    parsed = from_unit("CSG-25-100", ["h_pz", "h_c"], OUTPUT, None, 0.1,
+                       parse_bounds_options(["h_pz=0.5e-3:0.7e-3"]), {})[1]
+    assert typed == parsed and typed.bounds[0] == (0.5e-3, 0.7e-3)
+
+
+@pytest.mark.parametrize("value", ["0.5e-3:0.7e-3", (0.7e-3, 0.5e-3), (1e-3, 1e-3), (1e-3,), (1e-3, 2e-3, 3e-3),
+                                   (1e-3, math.nan), (-math.inf, 1.0), (True, 2.0), ("a", "b"), 0.5e-3, None])
+def test_bounds_that_are_not_low_high_pairs_are_refused_in_python_words(value):
+    with pytest.raises(InputError) as err:
+        bounds_pair("h_pz", value)
+    assert str(err.value) == f"bounds for 'h_pz' must be (low, high) with low < high, got {value!r}"
+
+
+@pytest.mark.parametrize("params, kwargs, message", [
+    (["h_pz", "input_friction.nope"], {}, "unknown parameter 'input_friction.nope'; did you mean input_friction."),
+    (["h_pz", "nope"], {}, "unknown parameter 'nope'; known: "),
+    ({"h_pz": "0.5e-3:0.7e-3"}, {}, "bounds for 'h_pz' must be (low, high) with low < high, got '0.5e-3:0.7e-3'"),
+    ({"h_pz": (0.7e-3, 0.5e-3)}, {}, "bounds for 'h_pz' must be (low, high) with low < high"),
+    (["h_pz"], {"bounds": {"h_pz": (0.7e-3, 0.5e-3)}}, "bounds for 'h_pz' must be (low, high) with low < high"),
+    (["h_pz"], {"bounds": {"h_c": (5e-4, 7e-4)}}, "unknown parameter 'h_c' in bounds: the study varies h_pz"),
+    ({"h_pz": (5e-4, 7e-4)}, {"bounds": {"h_pz": (5e-4, 7e-4)}}, "bounds for 'h_pz' are given twice"),
+    (["h_pz"], {"range": None}, "no bounds for 'h_pz': give range=FRACTION or bounds={'h_pz': (low, high)}"),
+    (["h_pz"], {"range": "10"}, "range must be a fraction in (0, 10)"),
+    (["h_pz"], {"range": -0.1}, "range must be a fraction in (0, 10)"),
+    (["h_pz"], {"range": True}, "range must be a fraction in (0, 10)"),
+    (["h_pz"], {"dists": {"h_c": "unif"}}, "unknown parameter 'h_c' in dists: the study varies h_pz"),
+    (["h_pz"], {"dists": {"h_pz": "norm"}, "bounds": {"h_pz": (5e-4, 7e-4)}},
+     "'h_pz' is normal: give dists={'h_pz': 'norm:MEAN:SD'} instead of bounds"),
+    ([], {}, "sobol needs at least one parameter"),
+])
+def test_python_errors_name_python_arguments_not_cli_options(drive, params, kwargs, message):
+    with pytest.raises(InputError) as err:
+        hdsim.sobol(drive, params, OUTPUT, n=8, replicates=2, workers=1, progress=False, **kwargs)
+    text = str(err.value)
+    assert message in text and "\n" not in text
+    assert "--" not in text  # no command-line option in a Python message
+
+
+@pytest.mark.parametrize("bounds, fragment", [
+    (["h_pz=0.7e-3:0.5e-3"], "lo < hi"),
+    (["h_pz=thin:0.7e-3"], "LO:HI"),
+    (["h_c=0.5e-3:0.7e-3"], "unknown parameter in --bounds"),
+])
+def test_the_cli_keeps_its_option_words(cli, bounds, fragment):
+    code, out, err = cli("sobol", "--unit", "CSG-25-100", "--params", "h_pz", "--output", OUTPUT,
+                         "--bounds", *bounds, "--json")
+    lines = err.strip().splitlines()
+    assert code == 2 and out == "" and len(lines) == 1 and fragment in lines[0], err
