@@ -83,7 +83,8 @@ from hdsim.errors import InputError, SolverError
 from hdsim.identification import running_diagnosis  # noqa: F401  (registers the running-torque kind)
 from hdsim.identification.confidence import diagnosis_confidence
 from hdsim.identification.engine import Candidate, Diagnosis, Step
-from hdsim.identification.fit import Evaluator, build_model, fit, fit_many, make_problem, parse_effects, result_of
+from hdsim.identification.fit import (Evaluator, build_model, check_nested, fit, fit_many, make_problem,
+                                      parse_effects, result_of)
 from hdsim.identification.folds import folds, one_loading_rate
 from hdsim.identification.outcome import plausibility, twist_limits
 from hdsim.identification.problem import other_starts
@@ -289,6 +290,9 @@ class TwistSession:
             except (InputError, SolverError) as exc:
                 scored.append(Candidate.failed(family, effect_id, str(exc)))
                 continue
+            if family not in step.effects:  # an added family holds the step's model (another form does not)
+                for cand_fit, base_fit in zip(res[1:], step.fold_fits):
+                    check_nested(cand_fit.rss, base_fit.rss, f"{family}={effect_id} (hold-out fold fit)")
             scored.append(score_candidate(family, effect_id, res, step, self.kind.thresholds))
         return scored
 

@@ -56,7 +56,11 @@ def fit_many(ev: Evaluator, problems: list[FitProblem], *, tol: float = 1e-3, lo
 
     A fit stops after two iterations in a row that lower its cost by less than ``tol``
     (relative; 1e-3 of the RSS is a BIC change of n·1e-3, below any decision threshold),
-    after ``max_iter`` iterations, or when no damping value gives a lower cost.
+    after ``max_iter`` iterations, or when no damping value gives a lower cost. A fit
+    whose start holds a fitted model it contains (`hdsim.identification.problem.NestedStart`)
+    evaluates that model's optimum on its first pass and ends there if it would end above
+    it: the stopping rule and the iteration limit end a fit wherever it is, and a start
+    guessed from the data may lie in another basin.
     Returns the number of batched passes (ticks) it took.
     """
     pending = [p for p in problems if not p.done]
@@ -214,7 +218,8 @@ def check_nested(candidate_cost: float, baseline_cost: float, label: str = "") -
     if not candidate_cost <= baseline_cost * (1.0 + NESTING_TOLERANCE) + 1e-300:
         raise RuntimeError(f"internal error: the fit of {label or 'a model'} ended at RSS {candidate_cost:.9g}, "
                            f"above the {baseline_cost:.9g} of the model it contains (by "
-                           f"{candidate_cost / baseline_cost - 1.0:.3g} relative; at most {NESTING_TOLERANCE:g})")
+                           f"{candidate_cost / max(baseline_cost, 1e-300) - 1.0:.3g} relative; at most "
+                           f"{NESTING_TOLERANCE:g})")
 
 
 class FittedRows:

@@ -18,6 +18,8 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
+import numpy as np
+
 __all__ = ["Thresholds", "RoundState", "Decision", "decide_round", "wants_other_forms", "rate_ambiguity",
            "rate_question_left", "explains_as_well"]
 
@@ -259,8 +261,6 @@ def rate_question_left(ranked: list, state: RoundState, thresholds: Thresholds) 
 def explains_as_well(best_score, rival_score, thresholds: Thresholds):
     """The rival also explains the residual (score below the threshold) within
     max(``shape_floor``, ``shape_margin``·|best|) of the best score (numpy-vectorised)."""
-    import numpy as np
-
     return (rival_score < thresholds.score) & (
         rival_score - best_score < np.maximum(thresholds.shape_floor, thresholds.shape_margin * np.abs(best_score)))
 

@@ -16,6 +16,12 @@ valid. ``K0`` (and a hardening law's high-load stiffness ratio) is turned into m
 parameters by `split_stiffness`; each effect maps its own fitted values back onto its
 fields (`Effect.fit_updates`).
 
+A start that holds a fitted model's values (``stiffness.K0`` and its families') also
+gives the point where the families that model lacks are at their neutral values
+(`Effect.neutral_start`, mapped exactly, bounds included): there the cost is the fitted
+model's, and the optimiser never ends above it (`NestedStart`), so a larger model is
+never fitted worse than the model it contains.
+
 The angle offset and, for a kinematic-error test, the coefficients of the
 kinematic-error effect's linear basis (`KinematicError.linear_basis`) are solved exactly
 for every trial by linear least squares (variable projection), so the offset is

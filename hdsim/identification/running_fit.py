@@ -18,7 +18,10 @@ an encoder is least certain there.
 Every amplitude enters the law linearly, so the fit is a bounded linear least-squares
 problem (`scipy.optimize.lsq_linear`) for each Stribeck speed of a short log-spaced
 grid, the best of which is kept. A fit costs milliseconds, so a diagnosis can refit
-every candidate on every hold-out fold.
+every candidate on every hold-out fold. The columns span amplitudes the law cannot hold
+(a ripple on a Coulomb level of 0); a solution with such amplitudes is replaced by
+the best one the law holds (`RunningTerm.holds`), so a family added to a model never
+fits worse than the model without it.
 """
 
 from __future__ import annotations
