@@ -12,7 +12,8 @@ import pytest
 
 import truth
 from hdsim.identification.outcome import assess
-from hdsim.io.data_checks import DriveScale, examine
+from hdsim.identification.workflow import examine
+from hdsim.io.data_checks import DriveScale
 from hdsim.io.measurement import make_measurement, save_measurement
 from hdsim.model.catalog import load_unit
 from hdsim.signals import local_cubic_weights, noise_level

@@ -16,7 +16,8 @@ import pytest
 from hdsim.errors import InputError
 from hdsim.identification.running_diagnosis import diagnose_running
 from hdsim.identification.running_fit import SweepRecord, fit_running
-from hdsim.io.data_checks import DriveScale, examine
+from hdsim.identification.workflow import examine
+from hdsim.io.data_checks import DriveScale
 from hdsim.io.measurement import load_measurement, make_measurement, save_measurement
 from hdsim.io.running_checks import sweep_kinematics
 from hdsim.model.catalog import load_unit

@@ -125,7 +125,8 @@ def run_case(group: str, seed: int, max_rows: int | None = None) -> dict:
                    gen_seconds=round(time.perf_counter() - start, 2))
         from hdsim.identification.diagnosis import diagnose
         from hdsim.identification.outcome import assess
-        from hdsim.io.data_checks import DriveScale, examine
+        from hdsim.identification.workflow import examine
+        from hdsim.io.data_checks import DriveScale
         from hdsim.io.measurement import load_measurement
         from hdsim.model.catalog import load_unit
 

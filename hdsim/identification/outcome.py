@@ -31,7 +31,7 @@ def assess(diagnosis_json: dict, data: dict, kind) -> tuple[str, str]:
     diagnosis_json : dict
         `hdsim.identification.engine.Diagnosis.to_json` of the diagnosis.
     data : dict
-        The data summary of `hdsim.io.data_checks.examine` (``reversals``,
+        The data summary of `hdsim.identification.workflow.examine` (``reversals``,
         ``loading_rates``, ``rows``).
     kind : hdsim.identification.test_kinds.TestKind
         The record's test kind: what keeps its records from deciding (`TestKind.limits`)

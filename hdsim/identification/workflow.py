@@ -27,18 +27,29 @@ from hdsim.io.data_checks import DriveScale, import_checks, wrong_test
 from hdsim.io.measurement import Measurement
 from hdsim.model.catalog import load_unit
 
-__all__ = ["diagnose", "fit", "BenchDiagnosis", "WrongTest", "examine_record", "test_kind"]
+__all__ = ["diagnose", "fit", "BenchDiagnosis", "WrongTest", "examine", "examine_record", "test_kind"]
+
+
+def examine(meas: Measurement, scale: DriveScale) -> tuple[list, dict, str]:
+    """Every check of a record before a fit: (checks, data summary, wrong-test sentence or '').
+
+    The checks are the import's (`hdsim.io.data_checks.import_checks`) and the record's
+    test kind's (`TestKind.checks`). The data summary holds ``rows``, ``dropped_rows`` and
+    the kind's figures (noise floors, reversals, loading rates, speeds …).
+    """
+    checks, figures = test_kind(meas.test).checks(meas, scale)
+    checks = import_checks(meas) + list(checks)
+    data = {"rows": len(meas), "dropped_rows": meas.rows.dropped_rows, **figures}
+    return checks, data, wrong_test(checks)
 
 
 def examine_record(meas: Measurement, unit=None) -> tuple[list[dict], dict, str, DriveScale]:
     """(checks as JSON objects, data summary, wrong-test sentence or '', the drive's
-    `hdsim.io.data_checks.DriveScale`) of a record against the named drive."""
+    `hdsim.io.data_checks.DriveScale`) of a record against the named drive (`examine`)."""
     drive = unit if unit is not None and not isinstance(unit, str) else load_unit(unit)
     scale = DriveScale.of(drive)
-    checks, figures = test_kind(meas.test).checks(meas, scale)
-    checks = import_checks(meas) + list(checks)
-    data = {"rows": len(meas), "dropped_rows": meas.rows.dropped_rows, **figures}
-    return [c.to_json() for c in checks], data, wrong_test(checks), scale
+    checks, data, wrong = examine(meas, scale)
+    return [c.to_json() for c in checks], data, wrong, scale
 
 
 @dataclass

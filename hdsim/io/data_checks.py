@@ -22,7 +22,7 @@ import numpy as np
 from hdsim.io.check import Check
 from hdsim.signals import loading_rates, noise_level, rate_groups, torque_legs
 
-__all__ = ["DriveScale", "run_checks", "wrong_test", "import_checks", "examine"]
+__all__ = ["DriveScale", "run_checks", "wrong_test", "import_checks"]
 
 #: a locked drive twists at most this many times its softest catalog compliance predicts
 #: (K1 over the whole torque swing, plus a generous lost motion) before the record is
@@ -263,22 +263,3 @@ def import_checks(meas) -> list[Check]:
         out.append(Check("time_axis", "warn", "no time column: time is the row index over the given sample "
                          "rate, so rate-dependent effects (damping) are not identifiable from this log"))
     return out
-
-
-def examine(meas, drive: DriveScale) -> tuple[list[Check], dict, str]:
-    """Every check of a record before a fit: (checks, data summary, wrong-test sentence or '').
-
-    The data summary holds ``rows``, ``dropped_rows`` and the model-free noise floors
-    (``noise_floor_rad``, ``torque_noise_Nm``), the reversals and the distinct loading rates.
-    """
-    if meas.test == "running_torque":
-        # imported here: running_checks loads scipy.signal (about a second) that a locked
-        # or kinematic-error record never needs; the dependency still runs one way only
-        from hdsim.io.running_checks import running_checks
-
-        checks, figures = running_checks(meas, drive)
-    else:
-        checks, figures = run_checks(meas, drive)
-    checks = import_checks(meas) + checks
-    data = {"rows": len(meas), "dropped_rows": meas.rows.dropped_rows, **figures}
-    return checks, data, wrong_test(checks)
