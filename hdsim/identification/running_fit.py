@@ -31,7 +31,6 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
-from scipy.optimize import lsq_linear
 
 from hdsim.errors import InputError
 from hdsim.identification.optimizer import FittedRows, effective_n
@@ -326,6 +325,10 @@ def _design(rec: SweepRecord, terms: list[RunningTerm], nonlinear: dict, widened
 
 
 def _solve(A, y, lower, upper):
+    # imported here: scipy.optimize costs about 0.2 s, which a command on a locked record
+    # would pay only to register the running-torque kind
+    from scipy.optimize import lsq_linear
+
     scale = np.sqrt(np.sum(A * A, axis=0))
     scale[scale == 0] = 1.0
     sol = lsq_linear(A / scale, y, bounds=(lower * scale, upper * scale), method="bvls")

@@ -25,7 +25,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import savgol_filter
 
 from hdsim.io.check import Check
 from hdsim.signals import noise_level
@@ -63,6 +62,10 @@ def speed_and_acceleration(time, angle, window_s: float = 0.01) -> tuple[np.ndar
     The windows span about ``window_s`` (speed) and twice that (acceleration), at least 7
     and 11 samples: long enough to average encoder steps, short enough to follow a ramp.
     """
+    # imported here: scipy.signal costs about 0.4 s, and only a sweep's record needs it (a
+    # command on a locked record registers the running-torque kind without running it)
+    from scipy.signal import savgol_filter
+
     t = np.asarray(time, dtype=float)
     x = np.asarray(angle, dtype=float)
     dt = float(np.median(np.diff(t)))
