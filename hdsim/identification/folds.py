@@ -65,7 +65,7 @@ def folds(meas: Measurement) -> tuple[list[np.ndarray], str]:
     legs (or of its time, when there are fewer than two legs).
     """
     n = len(meas)
-    if meas.test == "kinematic_error":
+    if meas.wg_driven:
         # both folds need both load directions (else the twist under load is not
         # identified): alternate blocks of ten wave-generator revolutions
         wg = np.asarray(meas.wg_angle, dtype=float)
@@ -135,7 +135,7 @@ def blocks(meas: Measurement) -> tuple[list[int], str]:
     ``MIN_BLOCKS`` cycles. Kinematic-error tests: blocks of ten
     wave-generator revolutions when that gives ten blocks or more, else single revolutions.
     """
-    if meas.test == "kinematic_error":
+    if meas.wg_driven:
         wg = np.asarray(meas.wg_angle, dtype=float)
         travel = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(wg)))]) / (2 * np.pi)
         per = 10 if travel[-1] >= 100 else 1

@@ -59,7 +59,7 @@ E_MAX_FACTOR = 1e6
 
 def relative_angle(meas: Measurement) -> np.ndarray:
     """Angle relative to the kinematic ideal [rad] (stiffness test: the angle itself)."""
-    if meas.test == "kinematic_error":
+    if meas.wg_driven:
         return meas.kinematic_error
     return np.asarray(meas.angle, dtype=float)
 
@@ -272,7 +272,7 @@ class Evaluator:
                              "there is nothing to fit")
         # all samples up to max_steps, else a step budget (the grid adapts to each batch)
         self.grid = None if self.n <= max_steps else int(max_steps)
-        if self.test == "kinematic_error":
+        if meas.wg_driven:
             self.wg = np.asarray(meas.wg_angle, dtype=float)
             self.ideal = self.wg / float(meas.ratio)
         else:

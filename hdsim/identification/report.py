@@ -48,7 +48,7 @@ def _label(step) -> str:
 
 def _x(meas):
     """Angle relative to the kinematic ideal [rad] (stiffness test: the angle itself)."""
-    if meas.test == "kinematic_error":
+    if meas.wg_driven:
         return meas.kinematic_error
     return np.asarray(meas.angle, dtype=float)
 
@@ -99,7 +99,7 @@ def write_report(diagnosis, folder, assessment: dict | None = None) -> Path:
     y = _x(meas)
     ax.plot(T, (y - first.fit.offset) * arcsec, ".", ms=2, color="0.6", label="measured")
     for step, style in zip(ends, ("--", "-")[-len(ends):]):
-        model = step.fit.prediction - (0 if meas.test == "stiffness" else np.asarray(meas.wg_angle) / meas.ratio)
+        model = step.fit.prediction - (np.asarray(meas.wg_angle) / meas.ratio if meas.wg_driven else 0)
         ax.plot(T, (model - first.fit.offset) * arcsec, style, lw=1, label=f"model: {_label(step)}")
     ax.set_xlabel("torque [N·m]")
     ax.set_ylabel("angle − offset [arcsec]")
@@ -123,7 +123,7 @@ def write_report(diagnosis, folder, assessment: dict | None = None) -> Path:
     drawn.append(save(fig, folder / FIGURES[2]))
 
     # spectrum
-    if meas.test == "kinematic_error":
+    if meas.wg_driven:
         fig = new_figure((10, 4))
         axes = fig.subplots(1, 2)
         wg = np.asarray(meas.wg_angle, dtype=float)

@@ -166,7 +166,7 @@ def views(meas, residual) -> dict:
     direction, rate = loading_direction(meas.time, meas.torque)
     out = {"time": np.asarray(meas.time), "torque": np.asarray(meas.torque),
            "residual": np.asarray(residual), "direction": direction, "rate": rate}
-    if meas.test == "kinematic_error":
+    if meas.wg_driven:
         out["wg_angle"] = np.asarray(meas.wg_angle)
     return out
 
@@ -243,7 +243,7 @@ def findings(meas, residual, max_items: int = 5) -> list[str]:
                                 f"({'the drive is stiffer' if curve < 0 else 'the drive is softer'} "
                                 f"than the model at high load): stiffness changing with load "
                                 f"(hardening)"))
-    if meas.test == "kinematic_error":
+    if meas.wg_driven:
         ratio = float(meas.ratio)
         wg = np.asarray(meas.wg_angle, dtype=float)
         for k, label in ((1, "1× wave generator"), (2, "2× wave generator"),

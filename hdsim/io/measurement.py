@@ -126,6 +126,12 @@ class Measurement:
         return f"Measurement(test={self.test!r}, rows={len(self)}{extra}, source={self.source!r})"
 
     @property
+    def wg_driven(self) -> bool:
+        """True when the wave generator turned and its angle was logged (a kinematic-error or
+        running-torque record); False for a locked record."""
+        return self.wg_angle is not None
+
+    @property
     def output_angle(self) -> np.ndarray | None:
         """Output angle [rad] of a kinematic-error or running-torque test; None for a stiffness test."""
         return None if self.test == "stiffness" else self.angle
