@@ -83,10 +83,12 @@ def test_a_friction_sweep_is_not_a_stiffness_test(tmp_path, cli):
     code, out, err = cli("fit", path, "--json")
     assert code == 2 and out == ""
     assert len(err.strip().splitlines()) == 1 and "not a stiffness test" in err and "turning freely" in err
-    code, out, err = cli("diagnose", path, "--json")
+    code, out, err = cli("diagnose", path, "--json", "--report", str(tmp_path / "rep"))
     assert code == 0, err
     summary = json.loads(out)
     assert summary["outcome"] == "wrong_test" and summary["added"] == []
+    page = (tmp_path / "rep" / "index.html").read_text()  # the page says why nothing was fitted
+    assert summary["report"].endswith("index.html") and "not a stiffness test" in page and "twist_span" in page
     by = {c["check"]: c for c in summary["checks"]}
     assert by["twist_span"]["status"] == "fail" and by["torque_noise"]["status"] == "warn"
 
