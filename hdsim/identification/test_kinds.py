@@ -26,32 +26,18 @@ A session (`TestKind.session`) is the kind's state for one record. The engine re
 from __future__ import annotations
 
 from collections.abc import Mapping
-from types import MappingProxyType
 from typing import ClassVar
 
 from hdsim.errors import InputError, unknown_name
 from hdsim.identification.engine import run_diagnosis
 from hdsim.identification.policy import Thresholds
+from hdsim.io.measurement_checks import register_test_columns, unregister_test_columns
+from hdsim.model.family import FamilyKnowledge
 
 __all__ = ["TestKind", "FamilyKnowledge", "register_test_kind", "unregister_test_kind", "test_kind", "test_kinds"]
 
 #: test name -> registered kind
 _KINDS: dict[str, "TestKind"] = {}
-
-
-class FamilyKnowledge:
-    """What a diagnosis knows of a family, for a kind whose families are not effects of the
-    elastic path (`hdsim.model.effects.base.Effect`) or running-torque terms
-    (`hdsim.model.running_terms.RunningTerm`), which declare the same attributes."""
-
-    #: the family a record at one loading rate cannot tell this one from ('' for none)
-    rate_partner: ClassVar[str] = ""
-    #: its signature is its change with the loading rate
-    rate_dependent: ClassVar[bool] = False
-    #: other family -> the measurement that separates this family from it
-    separated_by: ClassVar[Mapping[str, str]] = MappingProxyType({})
-    #: the measurement that separates this family from any other ('' for none)
-    separated_from_any: ClassVar[str] = ""
 
 
 class TestKind:
@@ -87,11 +73,11 @@ class TestKind:
     def rate_partner(self, family: str) -> str:
         """The family one loading rate cannot tell ``family`` from ('' for none)."""
         cls = self.families().get(family)
-        return getattr(cls, "rate_partner", "") if cls is not None else ""
+        return cls.rate_partner if cls is not None else ""
 
     def rate_dependent(self, family: str) -> bool:
         cls = self.families().get(family)
-        return bool(getattr(cls, "rate_dependent", False))
+        return cls is not None and cls.rate_dependent
 
     def separating(self, a: str, b: str) -> str:
         """The measurement that separates families ``a`` and ``b`` (each pair written once,
@@ -199,8 +185,6 @@ def register_test_kind(kind: TestKind) -> TestKind:
     if not kind.name:
         raise InputError(f"{type(kind).__name__} needs a test name")
     if kind.columns:
-        from hdsim.io.measurement_checks import register_test_columns
-
         register_test_columns(kind.name, kind.columns, kind.optional_columns)
     _KINDS[kind.name] = kind
     return kind
@@ -210,8 +194,6 @@ def unregister_test_kind(name: str) -> None:
     """Remove a kind registered with `register_test_kind` (and its columns)."""
     kind = _KINDS.pop(name, None)
     if kind is not None and kind.columns:
-        from hdsim.io.measurement_checks import unregister_test_columns
-
         unregister_test_columns(name)
 
 

@@ -17,6 +17,7 @@ The tutorial ``docs/tutorial-find-missing-effect.md`` walks through it.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -69,6 +70,10 @@ class BenchDiagnosis:
         The data checks and the plausibility of the final fit against the datasheet.
     data : dict
         The data summary of the checks (rows, noise floors, reversals, loading rates).
+    summary : dict
+        The engine's JSON of the diagnosis, made once (the outcome is judged on it).
+
+    Everything else (``added``, ``ranking``, ``steps``, ``final`` …) is the engine's result's.
     """
 
     diagnosis: object
@@ -78,33 +83,18 @@ class BenchDiagnosis:
     checks: list
     data: dict
     scale: DriveScale
+    summary: dict
     report_path: Path | None = None
 
-    @property
-    def added(self) -> list:
-        return list(self.diagnosis.added)
-
-    @property
-    def ranking(self) -> list:
-        return self.diagnosis.ranking
-
-    @property
-    def final(self):
-        return self.diagnosis.final
-
-    @property
-    def measurement(self) -> Measurement:
-        return self.diagnosis.measurement
-
     def __getattr__(self, name):
-        # everything else of the engine's result (steps, ambiguous, whiteness, table …)
+        # everything else of the engine's result (added, ranking, steps, whiteness, table …)
         if name == "diagnosis":
             raise AttributeError(name)
         return getattr(self.diagnosis, name)
 
     def to_json(self) -> dict:
         """The object ``hdsim diagnose --json`` prints (docs/cli.md)."""
-        out = self.diagnosis.to_json()
+        out = copy.deepcopy(self.summary)  # a caller may change what it gets
         out.update(outcome=self.outcome, next_measurement=self.next_measurement, checks=list(self.checks),
                    data=dict(self.data))
         if self.report_path is not None:
@@ -177,9 +167,10 @@ def diagnose(measurement: Measurement, effects=None, *, unit=None, families=None
         return WrongTest(measurement, wrong, checks, data)
     result = kind.diagnose(measurement, effects, unit=unit, families=families, candidates=candidates,
                            max_rounds=max_rounds, max_steps=max_steps, log=log)
-    outcome, next_measurement = assess(result.to_json(), data, kind)
+    summary = result.to_json()
+    outcome, next_measurement = assess(summary, data, kind)
     checks = checks + kind.plausibility(result.final.fit, scale)
-    return BenchDiagnosis(result, kind, outcome, next_measurement, checks, data, scale)
+    return BenchDiagnosis(result, kind, outcome, next_measurement, checks, data, scale, summary)
 
 
 def fit(measurement: Measurement, effects=None, *, unit=None):

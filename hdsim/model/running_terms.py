@@ -35,6 +35,7 @@ from typing import ClassVar
 import numpy as np
 
 from hdsim.errors import InputError, unknown_name
+from hdsim.model.family import FamilyKnowledge
 from hdsim.model.input_friction import InputFriction
 
 __all__ = ["RunningTerm", "CoulombLevel", "StribeckFriction", "ViscousLoss", "PositionRipple",
@@ -83,19 +84,13 @@ class Columns:
 
 
 @dataclass(frozen=True)
-class RunningTerm:
-    """One family's part of the running-torque law."""
+class RunningTerm(FamilyKnowledge):
+    """One family's part of the running-torque law, and what a diagnosis knows of the family."""
 
     family: ClassVar[str] = ""
     id: ClassVar[str] = ""
     #: what the term looks like in a sweep (for reports)
     signature: ClassVar[str] = ""
-    # what a diagnosis knows of the family (as on `hdsim.model.effects.base.Effect`)
-    rate_partner: ClassVar[str] = ""
-    rate_dependent: ClassVar[bool] = False
-    #: other family -> the measurement that separates this family from it
-    separated_by: ClassVar[Mapping[str, str]] = MappingProxyType({})
-    separated_from_any: ClassVar[str] = ""
 
     def grid(self, speeds: np.ndarray) -> tuple[float, ...]:
         """Values of the term's non-linear parameter to try (``()``: none)."""

@@ -18,13 +18,12 @@ name (`Effect.placeholder`).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass, fields
-from types import MappingProxyType
 from typing import ClassVar
 
 import numpy as np
 
+from hdsim.model.family import FamilyKnowledge
 from hdsim.model.parameters import Parameters
 
 
@@ -75,8 +74,9 @@ class FreeParameter:
     start: float
 
 
-class Effect(Parameters):
-    """Base of all effects: one family, the states its memory needs, the fit protocol."""
+class Effect(Parameters, FamilyKnowledge):
+    """Base of all effects: one family, the states its memory needs, the fit protocol, and
+    what a diagnosis knows of the family (`FamilyKnowledge`, set on the family's base class)."""
 
     family: ClassVar[str] = ""
     id: ClassVar[str] = ""
@@ -95,19 +95,6 @@ class Effect(Parameters):
     #: kind that the family would lose its round to another family's proxy (friction in
     #: series with the spring and beside it)
     entry_forms: ClassVar[tuple[str, ...]] = ()
-
-    # what a diagnosis knows of the family, declared on the family's base class
-    #: the family a record at one loading rate cannot tell this one from: of such a pair,
-    #: one loss grows with the rate and the other does not ('' for none)
-    rate_partner: ClassVar[str] = ""
-    #: True for a family whose signature is its change with the loading rate, so that a
-    #: record at one rate cannot ask about it
-    rate_dependent: ClassVar[bool] = False
-    #: other family -> the measurement that separates this family from it (each pair is
-    #: written on one of its two families)
-    separated_by: ClassVar[Mapping[str, str]] = MappingProxyType({})
-    #: the measurement that separates this family from any other ('' for none)
-    separated_from_any: ClassVar[str] = ""
 
     @property
     def prefix(self) -> str:
