@@ -27,7 +27,7 @@ def main() -> None:
 
     from hdsim.identification.diagnosis import diagnose
     from hdsim.io.measurement import load_measurement
-    from hdsim.identification.report import FIGURES, write_report
+    from hdsim.identification.report import FIGURES
 
     FIG.mkdir(parents=True, exist_ok=True)
     cols, tr = truth.make_stiffness_data({"damping"}, {"friction"}, seed=1, n_rows=2000)
@@ -36,7 +36,7 @@ def main() -> None:
     meas = load_measurement(data)
     result = diagnose(meas, "friction")
     with tempfile.TemporaryDirectory() as tmp:
-        write_report(result, tmp)
+        result.report(tmp)
         for name in FIGURES:
             shutil.copy(Path(tmp) / name, FIG / f"diagnosis_{name}")
     summary = result.to_json()

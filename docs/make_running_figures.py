@@ -47,7 +47,7 @@ def main() -> None:
     from hdsim import load_unit, run_scenario
     from hdsim.identification.running_diagnosis import diagnose_running
     from hdsim.identification.running_fit import fit_running
-    from hdsim.identification.running_report import RUNNING_FIGURES, fit_figures, write_running_report
+    from hdsim.identification.running_report import fit_figures
     from hdsim.io.data_checks import DriveScale
     from hdsim.io.measurement import load_measurement
 
@@ -57,14 +57,15 @@ def main() -> None:
     meas = load_measurement(log, {"time_s": "t", "torque_Nm": f"{KT}*iq_A", "wg_angle_rev": "motor_rev",
                                   "temperature_C": "fet_C"},
                             test="running_torque", ratio=100, drop_nan=True)
-    catalog = DriveScale.of(load_unit()).running_torque
+    scale = DriveScale.of(load_unit())
+    catalog = scale.running_torque
     base = fit_running(meas, [])
     fit_figures(base, FIG / "running_base", catalog)
     result = diagnose_running(meas, [])
     with tempfile.TemporaryDirectory() as tmp:
-        write_running_report(result, tmp, catalog_running_torque=catalog)
-        for name in RUNNING_FIGURES:
-            shutil.copy(Path(tmp) / name, FIG / f"running_diagnosis_{name}")
+        result.report(tmp, scale=scale)
+        for png in sorted(Path(tmp).glob("*.png")):
+            shutil.copy(png, FIG / f"running_diagnosis_{png.name}")
     (FIG / "running_diagnosis.json").write_text(json.dumps(result.to_json(), indent=1, default=float) + "\n")
     run = run_scenario(load_unit(), "running_torque")
     (FIG / "running_torque_scenario.json").write_text(

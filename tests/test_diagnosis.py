@@ -214,11 +214,14 @@ def test_cli_diagnose_json_and_report(tmp_path, capsys, monkeypatch, png_image):
     html = (tmp_path / "rep" / "index.html").read_text()
     for name in figures:
         png_image(tmp_path / "rep" / name)
-        assert name in page and name in html  # every figure is shown on both pages
+        assert f"]({name})" in page  # every figure is shown on the Markdown page ...
+    # ... and embedded in the HTML page, which fetches nothing and can be sent on its own
+    assert html.count('src="data:image/png;base64,') == page.count("![")
+    assert html.count("src=") == page.count("![")
     assert "Before and after" in page and "damping" in page
     # the page's table reports the numbers of the JSON: baseline and final rms error [arcsec]
     for step in ("baseline", "final"):
-        assert f"{j[step]['rmse_rad'] * ARCSEC_PER_RAD:.2f}" in page
+        assert f"{j[step]['rmse_rad'] * ARCSEC_PER_RAD:.4g}" in page
 
 
 # --------------------------------------------------------------------------- battery (slow)

@@ -49,7 +49,7 @@ def test_figures_are_drawn_and_saved_without_pyplot(tmp_path):
 
         import truth
         from hdsim.identification.diagnosis import diagnose
-        from hdsim.identification.report import FIGURES, write_report
+        from hdsim.identification.report import FIGURES
         from hdsim.io.measurement import make_measurement
         from hdsim.model.catalog import load_unit
         from hdsim.plotting import save_figure
@@ -82,7 +82,7 @@ def test_figures_are_drawn_and_saved_without_pyplot(tmp_path):
         cols, tr = truth.make_stiffness_data({"hardening"}, {"friction"}, seed=1, n_rows=300)
         meas = make_measurement("stiffness", cols["time_s"], cols["torque_Nm"], cols["angle_rad"],
                                 rated_torque=87.0)
-        write_report(diagnose(meas, "friction", families=["hardening"], max_rounds=1), "report")
+        diagnose(meas, "friction", families=["hardening"], max_rounds=1).report("report")
         written += [Path("report") / name for name in FIGURES]
 
         for path in written:

@@ -162,7 +162,6 @@ def test_a_gap_behind_a_one_rate_loss_is_found_while_the_loss_stays_undecided(tm
     the gap not at all (+0.5), so the diagnosis stopped with the pair. Now the friction
     stands in for the loss, not added, the gap is tried against it (−1501) and added; the
     pair is still reported with the second loading rate (zoo seed 62)."""
-    from hdsim.identification.report import write_report
 
     d = _zoo_diagnosis(tmp_path, {"backlash": "closing_gap", "friction": "coulomb_viscous"}, {"hardening": "sinh"},
                        "one_rate", 62)
@@ -170,7 +169,7 @@ def test_a_gap_behind_a_one_rate_loss_is_found_while_the_loss_stays_undecided(tm
     assert [(sorted(a["families"]), a["added"], a.get("provisional")) for a in d.ambiguous] == [
         (["damping", "friction"], False, "friction")]
     assert "friction" in d.final.effects and d.final.fit.rmse_rad < 0.2 * d.baseline.fit.rmse_rad
-    write_report(d, tmp_path / "report", {"outcome": "improved", "next_measurement": "", "checks": []})
+    d.report(tmp_path / "report", {"outcome": "improved", "next_measurement": "", "checks": []})
     page = (tmp_path / "report" / "index.md").read_text()
     assert "friction stood in the model for the loss (not added)" in page
     assert "friction (stand-in, not added)" in page  # the before/after table

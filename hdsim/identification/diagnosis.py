@@ -95,6 +95,7 @@ from hdsim.io.data_checks import run_checks
 from hdsim.io.measurement import Measurement
 from hdsim.model import effects as fx
 from hdsim.model.drive import SLOTS
+from hdsim.units import ARCSEC_PER_RAD
 
 __all__ = ["Diagnosis", "Step", "diagnose", "folds", "TwistTest", "TwistSession", "MAX_ITERATIONS"]
 
@@ -149,6 +150,7 @@ class TwistTest(TestKind):
     """A test whose error is the output angle [rad] against the model's (stiffness, kinematic error)."""
 
     thresholds = TWIST_THRESHOLDS
+    report_unit = ("arcsec", ARCSEC_PER_RAD)
     compiled_fits = True
     #: a record at one loading rate leaves the rate pair's question open (a locked test's
     #: loop; a driven test's rate is the speed, and damping shows without reversals)
@@ -205,10 +207,10 @@ class TwistTest(TestKind):
                 "the residual against time and torque in the report, and record the test at a second amplitude "
                 "and loading rate")
 
-    def write_report(self, diagnosis, directory, summary, scale):
-        from hdsim.identification.report import write_report
+    def report_figures(self, diagnosis, folder, scale):
+        from hdsim.identification.report import twist_figures  # matplotlib only when asked
 
-        return write_report(diagnosis, directory, summary)
+        return twist_figures(diagnosis, folder)
 
 
 class StiffnessTest(TwistTest):

@@ -161,6 +161,12 @@ class Diagnosis:
     def verdict(self) -> str:
         return self.kind.verdict(self.whiteness)
 
+    def report(self, directory, summary: dict | None = None, scale=None):
+        """Write the report page (``index.html``, ``index.md``, the figures) into ``directory``
+        (``summary``: the outcome and checks to show on top; ``scale``: the drive's datasheet
+        numbers); returns the path of ``index.html``."""
+        return self.kind.write_report(self, directory, summary or {}, scale)
+
     def to_json(self) -> dict:
         key = self.kind.error_key
         base, final = self.baseline, self.final

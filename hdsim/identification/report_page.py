@@ -1,25 +1,37 @@
-"""The parts every report page shares, whatever its test kind: figures drawn with
-matplotlib's object API, tables in HTML and Markdown, the outcome line and the checks.
+"""The report page of a diagnosis, the same for every test kind.
 
-The figures use no pyplot and select no backend, so writing a report leaves the backend
-of the calling process as it was; everything is written atomically.
+A page is a list of blocks (headings, paragraphs, tables, lists, figures) rendered twice:
+``index.html``, self-contained (each figure embedded as a base64 PNG, nothing fetched),
+and ``index.md`` (figures by file name). The sections every diagnosis has (outcome,
+verdict, data checks, before/after table, the rounds, how sure, other forms, ambiguous
+pairs, where the model fails) are written here from the diagnosis and its JSON, in the
+kind's report unit; a test kind adds its own figures and sections
+(`hdsim.identification.test_kinds.TestKind.report_figures` / ``report_sections``).
+
+Figures use matplotlib's object API (no pyplot, no backend selected), so writing a report
+leaves the backend of the calling process as it was; every file is written atomically.
 """
 
 from __future__ import annotations
 
+import base64
 import html
+from dataclasses import dataclass, field
 from pathlib import Path
+
+import numpy as np
 
 from hdsim.atomic import write_text_atomic
 from hdsim.io.figures import save_figure
 
-__all__ = ["new_figure", "save", "html_table", "md_table", "outcome_line", "check_rows", "CHECK_HEAD",
-           "html_page", "write_wrong_test_report"]
+__all__ = ["Page", "new_figure", "save", "step_label", "diagnosis_page", "wrong_test_page"]
 
-CHECK_HEAD = ("status", "check", "what the data say")
 STYLE = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}"
-         "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px;"
-         "font-size:90%}img{max-width:100%}")
+         "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px;font-size:90%}"
+         "img{max-width:100%}figcaption{font-size:90%;color:#444}")
+CHECK_HEAD = ("status", "check", "what the data say")
+#: column names of the error figures a kind reports (its JSON key less the unit)
+ERROR_NAMES = {"rmse": "rms", "max_abs_error": "max", "holdout_rmse": "hold-out rms"}
 
 
 def new_figure(figsize: tuple[float, float]):
@@ -32,51 +44,278 @@ def new_figure(figsize: tuple[float, float]):
 
 def save(fig, path: Path) -> Path:
     save_figure(fig, path, dpi=110, bbox_inches="tight")
-    return path
+    return Path(path)
 
 
-def md_table(head, rows) -> str:
-    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-    lines += ["| " + " | ".join(r) + " |" for r in rows]
-    return "\n".join(lines)
+def step_label(step) -> str:
+    return "+".join(step.effects) or "base"
 
 
-def html_table(head, rows) -> str:
-    out = ["<table><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in head) + "</tr>"]
-    out += ["<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>" for r in rows]
-    return "\n".join(out) + "</table>"
+@dataclass
+class Page:
+    """Blocks of a page, in reading order; `write` renders them as HTML and Markdown."""
+
+    title: str
+    blocks: list = field(default_factory=list)
+
+    def heading(self, text: str) -> "Page":
+        self.blocks.append(("h2", text))
+        return self
+
+    def text(self, text: str, strong: bool = False) -> "Page":
+        if text:
+            self.blocks.append(("strong" if strong else "p", text))
+        return self
+
+    def table(self, head, rows) -> "Page":
+        if rows:
+            self.blocks.append(("table", (tuple(head), [tuple(r) for r in rows])))
+        return self
+
+    def bullets(self, items) -> "Page":
+        if items:
+            self.blocks.append(("ul", list(items)))
+        return self
+
+    def figure(self, path: Path, caption: str) -> "Page":
+        self.blocks.append(("figure", (Path(path), caption)))
+        return self
+
+    def markdown(self) -> str:
+        out = [f"# {self.title}", ""]
+        for kind, value in self.blocks:
+            if kind == "h2":
+                out += [f"## {value}", ""]
+            elif kind in ("p", "strong"):
+                out += [f"**{value}**" if kind == "strong" else value, ""]
+            elif kind == "table":
+                head, rows = value
+                out += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+                out += ["| " + " | ".join(r) + " |" for r in rows] + [""]
+            elif kind == "ul":
+                out += [f"- {item}" for item in value] + [""]
+            else:
+                path, caption = value
+                out += [f"![{caption}]({path.name})", "", f"*{caption}*", ""]
+        return "\n".join(out)
+
+    def html(self) -> str:
+        esc = html.escape
+        body = [f"<h1>{esc(self.title)}</h1>"]
+        for kind, value in self.blocks:
+            if kind == "h2":
+                body.append(f"<h2>{esc(value)}</h2>")
+            elif kind == "p":
+                body.append(f"<p>{esc(value)}</p>")
+            elif kind == "strong":
+                body.append(f"<p><b>{esc(value)}</b></p>")
+            elif kind == "table":
+                head, rows = value
+                body.append("<table><tr>" + "".join(f"<th>{esc(h)}</th>" for h in head) + "</tr>"
+                            + "".join("<tr>" + "".join(f"<td>{esc(c)}</td>" for c in r) + "</tr>" for r in rows)
+                            + "</table>")
+            elif kind == "ul":
+                body.append("<ul>" + "".join(f"<li>{esc(item)}</li>" for item in value) + "</ul>")
+            else:  # embedded: the page is one file that can be sent on its own
+                path, caption = value
+                data = base64.b64encode(path.read_bytes()).decode("ascii")
+                body.append(f'<figure><img src="data:image/png;base64,{data}" alt="{esc(caption)}">'
+                            f"<figcaption>{esc(caption)}</figcaption></figure>")
+        return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{esc(self.title)}</title>"
+                f"<style>{STYLE}</style></head><body>{''.join(body)}</body></html>\n")
+
+    def write(self, folder) -> Path:
+        """Write ``index.md`` and ``index.html`` into ``folder``; returns ``index.html``."""
+        folder = Path(folder)
+        write_text_atomic(folder / "index.md", self.markdown())
+        write_text_atomic(folder / "index.html", self.html())
+        return folder / "index.html"
 
 
-def outcome_line(assessment: dict) -> str:
-    """The outcome and what to record next, in words, or '' without an assessment."""
-    if not assessment.get("outcome"):
-        return ""
-    text = f"Outcome: {assessment['outcome'].replace('_', ' ')}"
-    return text + (f"; to decide, record {assessment['next_measurement']}" if assessment.get("next_measurement")
-                   else "")
+def _top(page: Page, summary: dict) -> Page:
+    """Outcome, verdict and the data checks: what a reader needs before any table."""
+    if summary.get("outcome"):
+        line = f"Outcome: {summary['outcome'].replace('_', ' ')}"
+        if summary.get("next_measurement"):
+            line += f"; to decide, record {summary['next_measurement']}"
+        page.text(line, strong=True)
+    page.text(f"Verdict: {summary['verdict']}" if summary.get("verdict") else "")
+    checks = [(c["status"], c["check"], c["message"]) for c in summary.get("checks", [])]
+    return page.heading("The data").table(CHECK_HEAD, checks) if checks else page
 
 
-def check_rows(assessment: dict) -> list:
-    return [(c["status"], c["check"], c["message"]) for c in assessment.get("checks", [])]
-
-
-def html_page(title: str, body: list[str]) -> str:
-    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
-            f"<style>{STYLE}</style></head><body>{''.join(body)}</body></html>\n")
-
-
-def write_wrong_test_report(measurement, folder, summary: dict) -> Path:
+def wrong_test_page(measurement, folder, summary: dict) -> Path:
     """The page of a record that is not the test it claims: the verdict and the checks that
     say what it looks like (nothing was fitted). Returns ``index.html``."""
+    Path(folder).mkdir(parents=True, exist_ok=True)
+    return _top(Page(f"Diagnosis of {measurement.source}"), summary).write(folder)
+
+
+def _number(value, scale: float) -> str:
+    if value is None:
+        return ""
+    if isinstance(value, (list, tuple)):
+        return ", ".join(_number(v, scale) for v in value)
+    return f"{value * scale:.4g}"
+
+
+def _error_columns(kind, row: dict) -> list[str]:
+    fixed = {"step", "effects", "added", "provisional", "other_form", "score"}
+    return [k for k in row if k not in fixed and k.endswith("_" + kind.error_key.split("_", 1)[1])]
+
+
+def _before_after(kind, d: dict, unit: str, scale: float):
+    keys = _error_columns(kind, d["table"][0])
+    head = ["step", "effects", "added"] + [
+        f"{ERROR_NAMES.get(k.rsplit('_', 1)[0], k)} [{unit}]" for k in keys] + ["score"]
+    rows = []
+    for row in d["table"]:
+        changed = ", ".join(f"{f} as {e}" for f, e in (row.get("other_form") or {}).items())
+        held = f"{row['provisional']} (stand-in, not added)" if row.get("provisional") else ""
+        rows.append([str(row["step"]), "+".join(row["effects"]) or "base", row["added"] or changed or held]
+                    + [_number(row[k], scale) for k in keys]
+                    + ["" if row["score"] is None else f"{row['score']:.1f}"])
+    return head, rows
+
+
+def _round_rows(kind, step, scale: float, by_share: bool) -> list:
+    tried = [(c, c.family) for c in sorted(step.candidates, key=lambda c: c.score)]
+    tried += [(c, f"{c.family} in another form") for c in sorted(step.reshapes, key=lambda c: c.score)]
+    rows = []
+    for c, label in tried:
+        if c.fit is None:  # could not be fitted: the reason says why
+            rows.append([label, c.effect, "–", "–", "–"] + (["–"] if by_share else []) + [c.reason])
+            continue
+        gain = ", ".join(f"{100 * g:.0f} %" for g in c.holdout_gain)
+        if "pooled_holdout_gain" in c.figures:
+            gain = f"{100 * c.figures['pooled_holdout_gain']:.0f} % ({gain})"
+        rows.append([label, c.effect, f"{c.score:.1f}", _number(kind.fit_errors(c.fit)[kind.error_key], scale),
+                     gain] + ([f"{100 * c.share:.0f} %"] if by_share else []) + [c.reason])
+    return rows
+
+
+def _ambiguity_text(a: dict) -> str:
+    first, second = a["families"][:2]
+    if a.get("other_form"):
+        return (f"{first}, and {second} as {a['other_form'][second]} instead, explain the residual about "
+                f"equally well; {first} was added; to separate them: {a['measurement']}")
+    if a.get("added") is False:
+        held = (f"{a['provisional']} stood in the model for the loss (not added) while the other families "
+                f"were tried against it; " if a.get("provisional") else "")
+        return (f"{first} and {second}: this record cannot tell them apart, so neither was added; "
+                f"{held}to separate them: {a['measurement']}")
+    return f"{first} and {second} explain the residual about equally well; to separate them: {a['measurement']}"
+
+
+def _reshape_text(r: dict) -> str:
+    if r["instead_of"] is None:  # no candidate passed against the baseline; this form did
+        return (f"round {r['round']}: no family passed against the baseline, but {r['family']} as {r['to']} "
+                f"instead of {r['from']} explained the residual (score {r['score']:.1f}): the candidates were "
+                f"tried again against this form")
+    return (f"round {r['round']}: {r['family']} as {r['to']} instead of {r['from']} explained the residual "
+            f"better (score {r['score']:.1f}) than adding the round's best candidate, {r['instead_of']}: that "
+            f"part of the residual was the shape of the {r['family']}; the next round started from this form")
+
+
+def _confidence(page: Page, conf: dict) -> None:
+    if not conf.get("rounds"):
+        return
+    page.heading("How sure").text(
+        f"Hold-out predictions compared by their expected log predictive density (the best model first; SE "
+        f"of the difference over {conf.get('blocks', 0)} blocks: {conf.get('block_rule', '')}); P(added): "
+        f"share of {conf.get('resamples', 0)} block-bootstrap resamples of the record in which the rule adds "
+        f"that family in that round.")
+    for r in conf["rounds"]:
+        rows = []
+        for c in r["comparison"]:
+            p = r["probabilities"].get("none" if c["model"].startswith("(") else c["model"])
+            rows.append((c["model"], f"{c['elpd_diff']:.1f}", "–" if c["se_diff"] is None else f"{c['se_diff']:.1f}",
+                         "–" if p is None else f"{p:.2f}"))
+        page.text(f"Round {r['round']}:").table(("model", "Δelpd [nats]", "SE", "P(added)"), rows)
+
+
+def _common_figures(diagnosis, folder: Path, unit: str, scale: float) -> list:
+    """Residual vs time of every step (stick-slip, drift and joins show there first) and the
+    error of every step against the noise floor."""
+    kind, steps = diagnosis.kind, diagnosis.steps
+    t = np.asarray(diagnosis.measurement.time, dtype=float)
+    fig = new_figure((10, 3.5))
+    ax = fig.subplots()
+    for step in steps:
+        rows = getattr(step.fit, "rows", None)
+        r = np.asarray(step.fit.residual, dtype=float)
+        ax.plot(t, (r if rows is None else np.where(rows, r, np.nan)) * scale, lw=0.6, label=step_label(step))
+    ax.set(xlabel="time [s]", ylabel=f"residual [{unit}]", title="residual vs time")
+    ax.legend(fontsize=8)
+    out = [(save(fig, folder / "residual_vs_time.png"), "Residual (measured − model) against time, every step.")]
+    fig = new_figure((7, 4))
+    ax = fig.subplots()
+    keys = list(kind.fit_errors(steps[0].fit))
+    x = np.arange(len(steps))
+    width = 0.8 / len(keys)
+    for j, key in enumerate(keys):
+        ax.bar(x + (j - (len(keys) - 1) / 2) * width, [kind.fit_errors(s.fit)[key] * scale for s in steps], width,
+               label=f"{ERROR_NAMES.get(key.rsplit('_', 1)[0], key)} error")
+    floor = diagnosis.whiteness.get("noise_floor_" + kind.error_key.split("_", 1)[1])
+    if floor:
+        ax.axhline(floor * scale, color="k", ls=":", lw=1, label="noise floor (final residual)")
+    ax.set_xticks(x, [step_label(s) for s in steps], rotation=15, fontsize=8)
+    ax.set(ylabel=f"error [{unit}]", yscale="log", title="error after each step")
+    ax.legend(fontsize=8)
+    out.append((save(fig, folder / "error_fall.png"), "The error of every step's model against the noise floor."))
+    return out
+
+
+def diagnosis_page(diagnosis, folder, summary: dict, scale_numbers) -> Path:
+    """Write the figures and the page of a diagnosis of any test kind into ``folder``.
+
+    Parameters
+    ----------
+    diagnosis : hdsim.identification.engine.Diagnosis
+        The finished diagnosis.
+    folder : str or os.PathLike
+        Output folder, created if missing.
+    summary : dict
+        The diagnosis JSON with ``outcome``, ``next_measurement`` and ``checks``, as
+        ``hdsim diagnose --json`` prints it (a bare ``diagnosis.to_json()`` does too).
+    scale_numbers : hdsim.model.datasheet.DriveScale or None
+        The drive's datasheet numbers, for the kind's figures.
+
+    Returns
+    -------
+    pathlib.Path
+        ``index.html``.
+    """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    title = f"Diagnosis of {measurement.source}"
-    md = [f"# {title}", "", f"**{outcome_line(summary)}**", "", summary["verdict"], "", "## The data", "",
-          md_table(CHECK_HEAD, check_rows(summary)), ""]
-    write_text_atomic(folder / "index.md", "\n".join(md))
-    body = [f"<h1>{html.escape(title)}</h1>", f"<p><b>{html.escape(outcome_line(summary))}</b></p>",
-            f"<p>{html.escape(summary['verdict'])}</p>", "<h2>The data</h2>",
-            html_table(CHECK_HEAD, check_rows(summary))]
-    page = folder / "index.html"
-    write_text_atomic(page, html_page("hdsim diagnosis", body))
-    return page
+    kind = diagnosis.kind
+    unit, scale = kind.report_unit
+    d = {**diagnosis.to_json(), **summary}
+    page = _top(Page(f"Diagnosis of {diagnosis.measurement.source}"), d)
+    page.text(f"{kind.name.replace('_', ' ')} test, {len(diagnosis.measurement)} rows; hold-out folds by "
+              f"{d['holdout']}.")
+    page.heading("Before and after").table(*_before_after(kind, d, unit, scale))
+    by_share = kind.thresholds.min_share > 0
+    head = (["family", "effect", "score", f"rms [{unit}]", "hold-out gain"] + (["share explained"] if by_share else [])
+            + ["decision"])
+    for n, step in enumerate(diagnosis.steps, start=1):
+        if step.candidates:
+            page.heading(f"Round {n} (model: {step_label(step)})").table(head, _round_rows(kind, step, scale, by_share))
+    _confidence(page, d.get("confidence") or {})
+    if d["reshaped"]:
+        page.heading("Other forms").bullets(_reshape_text(r) for r in d["reshaped"])
+    if d["ambiguous"]:
+        page.heading("Ambiguous").bullets(_ambiguity_text(a) for a in d["ambiguous"])
+    if d["findings"]["baseline"] or d["findings"]["final"]:
+        page.heading("Where the model fails").text("Baseline:").bullets(d["findings"]["baseline"])
+        page.text("Final model:").bullets(d["findings"]["final"])
+    w = d["whiteness"]
+    page.text(f"Ljung–Box Q = {w['ljung_box_q']:.1f}, p = {w['p_value']:.3g}." if "ljung_box_q" in w else "")
+    for heading, head_rows in kind.report_sections(diagnosis, d):
+        page.heading(heading).table(*head_rows)
+    figures = _common_figures(diagnosis, folder, unit, scale)
+    figures[1:1] = kind.report_figures(diagnosis, folder, scale_numbers)
+    page.heading("Figures")
+    for path, caption in figures:
+        page.figure(path, caption)
+    return page.write(folder)

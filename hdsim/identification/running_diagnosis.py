@@ -64,6 +64,7 @@ class RunningTorqueTest(TestKind):
     name = "running_torque"
     error_unit = "N·m"
     error_key = "rmse_Nm"
+    report_unit = ("N·m", 1.0)
     thresholds = RUNNING_THRESHOLDS
     stop_when_white = False
 
@@ -133,10 +134,15 @@ class RunningTorqueTest(TestKind):
                 "against time and wave-generator angle in the report (a motor's cogging, a temperature drift, "
                 "a load that changes)")
 
-    def write_report(self, diagnosis, directory, summary, scale):
-        from hdsim.identification.running_report import write_running_report
+    def report_figures(self, diagnosis, folder, scale):
+        from hdsim.identification.running_report import running_figures  # matplotlib only when asked
 
-        return write_running_report(diagnosis, directory, summary, scale.running_torque or None)
+        return running_figures(diagnosis, folder, (scale.running_torque or None) if scale else None)
+
+    def report_sections(self, diagnosis, diagnosis_json):
+        from hdsim.identification.running_report import running_sections
+
+        return running_sections(diagnosis_json)
 
 
 register_test_kind(RunningTorqueTest())

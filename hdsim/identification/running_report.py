@@ -9,32 +9,23 @@ A fit (`hdsim fit` on a sweep) gets two figures beside its parameter file:
   level (divided by the direction), binned over one wave-generator turn, with the
   fitted ripple.
 
-A diagnosis (`hdsim diagnose --report DIR`) writes ``residual_vs_time.png`` (every
-step), those two figures for the final model, ``error_fall.png`` and ``index.html`` /
-``index.md`` with the outcome, the data checks, the rounds and the fitted law. Figures
-use matplotlib's object API (no pyplot), so the calling process's backend is untouched.
+A diagnosis report (`hdsim.identification.report_page`) shows those two figures for the
+final model, and the fitted law and the sweep's metrics as tables. Figures use
+matplotlib's object API (no pyplot), so the calling process's backend is untouched.
 """
 
 from __future__ import annotations
 
-import html
 import math
 from pathlib import Path
 
 import numpy as np
 
-from hdsim.atomic import write_text_atomic
-from hdsim.identification.report_page import (CHECK_HEAD, check_rows, html_page, html_table, md_table, new_figure,
-                                              outcome_line, save)
+from hdsim.identification.report_page import new_figure, save
 
-__all__ = ["torque_vs_speed", "ripple_vs_angle", "fit_figures", "write_running_report", "RUNNING_FIGURES"]
+__all__ = ["torque_vs_speed", "ripple_vs_angle", "fit_figures", "running_figures", "running_sections"]
 
 RPM = 30.0 / math.pi
-RUNNING_FIGURES = ("residual_vs_time.png", "torque_vs_speed.png", "ripple_vs_angle.png", "error_fall.png")
-
-
-def _label(step) -> str:
-    return "+".join(step.effects) or "base"
 
 
 def torque_vs_speed(fit, path, catalog_running_torque: float | None = None) -> Path:
@@ -126,107 +117,18 @@ def fit_figures(fit, stem, catalog_running_torque: float | None = None) -> list[
             ripple_vs_angle(fit, stem.with_name(stem.name + ".ripple.png"))]
 
 
-def write_running_report(diagnosis, folder, assessment: dict | None = None,
-                         catalog_running_torque: float | None = None) -> Path:
-    """Write the figures and pages of a running-torque diagnosis into a folder.
-
-    Parameters
-    ----------
-    diagnosis : hdsim.identification.engine.Diagnosis
-        The finished diagnosis.
-    folder : str or os.PathLike
-        Output folder, created if missing.
-    assessment : dict, optional
-        ``outcome``, ``next_measurement`` and ``checks`` as ``hdsim diagnose --json`` gives them.
-    catalog_running_torque : float, optional
-        Catalog no-load running torque on the input at 2000 rpm [N·m].
-
-    Returns
-    -------
-    pathlib.Path
-        ``index.html``.
-    """
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    assessment = assessment or {}
-    meas = diagnosis.measurement
-    t = np.asarray(meas.time, dtype=float)
-    fig = new_figure((10, 3.5))
-    ax = fig.subplots()
-    for step in diagnosis.steps:
-        r = np.where(step.fit.rows, step.fit.residual, np.nan)
-        ax.plot(t, r, lw=0.6, label=_label(step))
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("residual [N·m]")
-    ax.legend(fontsize=8)
-    drawn = [save(fig, folder / RUNNING_FIGURES[0])]
+def running_figures(diagnosis, folder, catalog_running_torque: float | None = None) -> list[tuple[Path, str]]:
+    """The sweep figures of the final model of a running-torque diagnosis; [(path, caption)]."""
     final = diagnosis.final.fit
-    drawn.append(torque_vs_speed(final, folder / RUNNING_FIGURES[1], catalog_running_torque))
-    drawn.append(ripple_vs_angle(final, folder / RUNNING_FIGURES[2]))
-    fig = new_figure((6, 3.5))
-    ax = fig.subplots()
-    ax.plot(range(len(diagnosis.steps)), [s.fit.rmse_Nm for s in diagnosis.steps], "o-", label="rms")
-    ax.axhline(diagnosis.whiteness["noise_floor_Nm"], ls=":", color="0.5", label="noise floor")
-    ax.set_xticks(range(len(diagnosis.steps)), [_label(s) for s in diagnosis.steps], fontsize=8)
-    ax.set_ylabel("error [N·m]")
-    ax.legend(fontsize=8)
-    drawn.append(save(fig, folder / RUNNING_FIGURES[3]))
-    names = [p.name for p in drawn]
-    write_text_atomic(folder / "index.md", _markdown(diagnosis, assessment, names))
-    page = folder / "index.html"
-    write_text_atomic(page, _html(diagnosis, assessment, names))
-    return page
+    return [(torque_vs_speed(final, Path(folder) / "torque_vs_speed.png", catalog_running_torque),
+             "Plateau means against speed with the fitted law's running torque, and the catalog point."),
+            (ripple_vs_angle(final, Path(folder) / "ripple_vs_angle.png"),
+             "What the law without its ripple leaves on the plateaus, against the wave-generator angle.")]
 
 
-HEAD = ("step", "effects", "rms [N·m]")
-ROUND = ("family", "effect", "score", "rms [N·m]", "share explained", "decision")
-
-
-def _tables(diagnosis):
-    d = diagnosis.to_json()
-    steps = [(str(r["step"]), "+".join(r["effects"]) or "base", f"{r['rmse_Nm']:.4g}") for r in d["table"]]
-    rounds = []
-    for n, r in enumerate(d["rounds"], start=1):
-        rows = [(c["family"], c["effect"], "—" if c["score"] is None else f"{c['score']:.1f}",
-                 "—" if c["rmse_Nm"] is None else f"{c['rmse_Nm']:.4g}",
-                 f"{100 * c.get('share_explained', 0.0):.0f} %", c["why"]) for c in r["candidates"]]
-        if rows:
-            rounds.append((n, "+".join(r["effects"]) or "base", rows))
+def running_sections(d: dict) -> list[tuple[str, tuple]]:
+    """The fitted law and the sweep's metrics, as (heading, (head, rows)) of the report."""
     law = [(k, str(v)) for k, v in d["final"]["law"].items()]
     metrics = [(k, "not run" if v is None else f"{v:.4g}") for k, v in d["metrics"].items()]
-    return d, steps, rounds, law, metrics
-
-
-def _markdown(diagnosis, assessment, figures) -> str:
-    d, steps, rounds, law, metrics = _tables(diagnosis)
-    parts = [f"# Diagnosis of {diagnosis.measurement.source}", ""]
-    if outcome_line(assessment):
-        parts += [f"**{outcome_line(assessment)}**", ""]
-    if check_rows(assessment):
-        parts += ["## The data", "", md_table(CHECK_HEAD, check_rows(assessment)), ""]
-    parts += [f"running-torque test, {len(diagnosis.measurement)} rows; hold-out by {d['holdout']}.", "",
-              f"**Verdict:** {d['verdict']}", "", "## Before and after", "", md_table(HEAD, steps), ""]
-    for n, effects, rows in rounds:
-        parts += [f"## Round {n} (model: {effects})", "", md_table(ROUND, rows), ""]
-    parts += ["## Fitted law (wave-generator shaft)", "", md_table(("field", "value"), law), "",
-              md_table(("metric", "value"), metrics), "", "## Figures", ""]
-    parts += [f"![{f}]({f})" for f in figures]
-    return "\n".join(parts) + "\n"
-
-
-def _html(diagnosis, assessment, figures) -> str:
-    d, steps, rounds, law, metrics = _tables(diagnosis)
-    body = [f"<h1>Diagnosis of {html.escape(str(diagnosis.measurement.source))}</h1>"]
-    if outcome_line(assessment):
-        body.append(f"<p><b>{html.escape(outcome_line(assessment))}</b></p>")
-    if check_rows(assessment):
-        body += ["<h2>The data</h2>", html_table(CHECK_HEAD, check_rows(assessment))]
-    body += [f"<p>running-torque test, {len(diagnosis.measurement)} rows.</p>",
-             f"<p><b>Verdict:</b> {html.escape(d['verdict'])}</p>", "<h2>Before and after</h2>",
-             html_table(HEAD, steps)]
-    for n, effects, rows in rounds:
-        body += [f"<h2>Round {n} (model: {html.escape(effects)})</h2>", html_table(ROUND, rows)]
-    body += ["<h2>Fitted law (wave-generator shaft)</h2>", html_table(("field", "value"), law),
-             html_table(("metric", "value"), metrics)]
-    body.append("<h2>Figures</h2>" + "".join(f'<p><img src="{f}" alt="{f}"></p>' for f in figures))
-    return html_page("hdsim diagnosis", body)
+    return [("Fitted law (wave-generator shaft)", (("field", "value"), law)),
+            ("Metrics", (("metric", "value"), metrics))]

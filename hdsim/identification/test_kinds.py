@@ -50,6 +50,8 @@ class TestKind:
     #: unit of the fit error, and its JSON key
     error_unit: ClassVar[str] = "rad"
     error_key: ClassVar[str] = "rmse_rad"
+    #: the unit the report shows errors in, and its factor from ``error_unit``
+    report_unit: ClassVar[tuple[str, float]] = ("rad", 1.0)
     #: the acceptance and tie thresholds of this kind
     thresholds: ClassVar[Thresholds] = Thresholds()
     #: the fits run faster with numba's compiled evaluator (``pip install 'hdsim[fast]'``)
@@ -166,10 +168,22 @@ class TestKind:
         return ("the residual keeps a structure that no family of the library explains on this record: look "
                 "at the residual against time in the report")
 
+    def report_figures(self, diagnosis, folder, scale) -> list:
+        """The kind's figures of a diagnosis report, drawn into ``folder``: [(path, caption)]
+        (``scale``: the drive's datasheet numbers). The residual against time and the error
+        of every step are drawn for every kind."""
+        return []
+
+    def report_sections(self, diagnosis, diagnosis_json: dict) -> list:
+        """The kind's tables of a diagnosis report: [(heading, (head, rows))]."""
+        return []
+
     def write_report(self, diagnosis, directory, summary: dict, scale):
         """Write the report page of ``diagnosis`` into ``directory`` (``summary``: its JSON;
         ``scale``: the drive's datasheet numbers); returns the page's path."""
-        raise InputError(f"no report is written for a {self.name} test")
+        from hdsim.identification.report_page import diagnosis_page  # matplotlib only when asked
+
+        return diagnosis_page(diagnosis, directory, summary, scale)
 
 
 def register_test_kind(kind: TestKind) -> TestKind:

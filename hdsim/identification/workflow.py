@@ -132,9 +132,9 @@ class WrongTest:
 
     def report(self, directory) -> Path:
         """Write a page that says why nothing was fitted (``index.html`` and ``index.md``)."""
-        from hdsim.identification.report_page import write_wrong_test_report
+        from hdsim.identification.report_page import wrong_test_page
 
-        self.report_path = write_wrong_test_report(self.measurement, directory, self.to_json())
+        self.report_path = wrong_test_page(self.measurement, directory, self.to_json())
         return self.report_path
 
 
