@@ -16,11 +16,13 @@ a coarsely sampled cycle as noise). For white noise of rms σ that residual has 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 __all__ = ["NOISE_WINDOW", "RATE_STEP", "local_cubic_weights", "noise_level", "smoothed", "turning_points",
-           "torque_legs", "loading_direction", "loading_rates", "rate_groups"]
+           "torque_legs", "loading_direction", "loading_rates", "rate_groups", "Breakaway", "angle_resolution",
+           "breakaway_episodes"]
 
 #: samples of the local cubic fit that the noise estimate subtracts
 NOISE_WINDOW = 7
@@ -126,3 +128,99 @@ def rate_groups(values, step: float = RATE_STEP) -> list[float]:
         return []
     cuts = np.flatnonzero(np.diff(np.log(v)) > math.log(step)) + 1
     return [float(np.median(g)) for g in np.split(v, cuts)]
+
+
+@dataclass(frozen=True)
+class Breakaway:
+    """One start of a shaft from rest, as `breakaway_episodes` finds it.
+
+    Attributes
+    ----------
+    direction : int
+        +1 or −1: the way the shaft turned.
+    rest, onset, stop : int
+        First row of the rest before it; the last row at rest (the motion began between
+        it and the next row); one past the last row of the motion.
+    torque : float
+        The torque at the onset, signed: the mean of the rows of the last 20 ms at rest.
+    uncertainty : float
+        Its standard uncertainty: the torque noise over those rows and the torque's change
+        within them (the sampling of a ramp, a step of a staircase).
+    held_torque : float
+        Span of the smoothed torque while the shaft stood: what the rest held.
+    travel : float
+        The angle turned, signed [unit of the angle].
+    """
+
+    direction: int
+    rest: int
+    onset: int
+    stop: int
+    torque: float
+    uncertainty: float
+    held_torque: float
+    travel: float
+
+
+def angle_resolution(angle) -> float:
+    """The smallest step of an angle record: an encoder's count, or the noise of an analogue
+    angle [unit of the angle]."""
+    x = np.asarray(angle, dtype=float)
+    steps = np.abs(np.diff(x))
+    moved = steps[steps > 0]
+    count = float(np.percentile(moved, 10)) if moved.size else 0.0
+    return max(count if moved.size > 0.02 * steps.size else 0.0, noise_level(x))
+
+
+def breakaway_episodes(time, angle, torque, rest_s: float = 0.1) -> list[Breakaway]:
+    """Every start of the shaft from a rest of at least ``rest_s`` [s] that turns it by five
+    angle resolutions or more.
+
+    A row is at rest when the angle spans at most three resolutions over ``rest_s``
+    around it; the onset is the last row whose angle is within one resolution of the
+    rest's. Model-free: the torque at the onset is the static friction the rest held
+    for a breakaway, and an elastic unloading for a locked drive (whose angle then moves
+    with the torque: ``held_torque`` and the torque change over the motion tell them apart).
+    """
+    t = np.asarray(time, dtype=float)
+    x = np.asarray(angle, dtype=float)
+    T = np.asarray(torque, dtype=float)
+    n = x.size
+    dt = float(np.median(np.diff(t))) if n > 1 else 1.0
+    half = max(int(0.5 * rest_s / dt), 1)
+    if n < 2 * half + 3:
+        return []
+    res = angle_resolution(x)
+    windows = np.lib.stride_tricks.sliding_window_view(x, 2 * half + 1)
+    at_rest = np.zeros(n, dtype=bool)
+    at_rest[half:n - half] = (windows.max(axis=1) - windows.min(axis=1)) <= 3.0 * res
+    starts = [int(i) for i in np.flatnonzero(at_rest & ~np.r_[False, at_rest[:-1]])]
+    noise = noise_level(T)
+    smooth, _ = smoothed(T, noise)
+    average = max(int(0.02 / dt), 3)
+    out = []
+    for r0 in starts:
+        r1 = r0 + int(np.argmin(at_rest[r0:])) if not at_rest[r0:].all() else n
+        if r1 >= n - 1:
+            continue  # rests to the end
+        anchor = float(np.median(x[r0:r1]))
+        away = np.flatnonzero(np.abs(x[r0:] - anchor) > res) + r0
+        if away.size == 0:
+            continue
+        onset = int(away[0]) - 1
+        later = np.flatnonzero(at_rest[r1:])
+        stop = n
+        if later.size:  # one past the last row off the next rest's angle: the shaft stood from there
+            settled = float(x[min(r1 + int(later[0]) + half, n - 1)])
+            off = np.flatnonzero(np.abs(x[onset:r1 + int(later[0]) + half + 1] - settled) > res)
+            stop = onset + int(off[-1]) + 1 if off.size else r1 + int(later[0])
+        travel = float(x[stop - 1] - anchor)
+        if abs(travel) < 5.0 * res or onset < r0:
+            continue
+        rows = slice(max(r0, onset - average + 1), onset + 1)
+        span = float(np.ptp(smooth[rows]))
+        m = onset + 1 - rows.start
+        out.append(Breakaway(int(np.sign(travel)), r0, onset, stop, float(np.mean(T[rows])),
+                             math.sqrt(noise ** 2 / m + span ** 2 / 12.0), float(np.ptp(smooth[r0:onset + 1])),
+                             travel))
+    return out

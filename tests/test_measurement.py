@@ -283,8 +283,6 @@ BAD_CSV = [
     ("missing_test", csv_text(meta="# ratio: 100\n"), ["'# test:'", "stiffness"]),
     ("unknown_test", csv_text(meta="# test: stiffnes\n"),
      ["unknown test 'stiffnes'", "did you mean stiffness", "kinematic_error"]),
-    ("malformed_hash", csv_text(meta="# test: stiffness\n# just a remark\n"),
-     ["line 2", "malformed '#' line", "'# key: value'"]),
     ("duplicate_key", csv_text(meta="# test: stiffness\n# test: stiffness\n"),
      ["line 2", "given twice"]),
     ("hash_after_header", csv_text(rows=with_row(6, "# test: x")),

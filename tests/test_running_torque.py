@@ -250,16 +250,15 @@ def test_a_fitted_law_pasted_into_a_scenario_runs_the_measured_friction():
 
 
 def test_halves_too_short_to_fit_add_nothing_unvalidated():
-    from hdsim.identification import running_diagnosis as rd
-
-    rec = SweepRecord.of(law_record(FULL))
-    empty = np.zeros(rec.speed.size, dtype=bool)
-    folds = ([empty, empty], [empty, empty])  # nothing to fit a half on
-    assert rd._holdout_rss(rec, [], folds) is None
     from hdsim.identification.engine import Step
+    from hdsim.identification.running_diagnosis import RunningSession
 
-    step = Step([], fit_running(rec, []), None)
-    cand = rd._try(rec, step, "friction", folds, at_floor=False)
+    session = RunningSession(law_record(FULL), {})
+    empty = np.zeros(session.record.speed.size, dtype=bool)
+    session.folds = ([empty, empty], [empty, empty])  # nothing to fit a half on
+    assert session._holdout_rss([]) is None
+    step = Step([], fit_running(session.record, []), None)
+    cand = session._try(step, "friction", at_floor=False)
     assert not cand.accepted and "too short" in cand.reason
 
 

@@ -26,8 +26,11 @@ def add_import_arguments(parser) -> None:
     group = parser.add_argument_group("reading the log (see the notes below)")
     group.add_argument("--columns", default=None, metavar="MAP",
                        help="column map for another bench, e.g. time_s=t,torque_Nm=5.11*iq_A,angle_deg=pos")
-    group.add_argument("--test", default=None, choices=("stiffness", "kinematic_error", "running_torque"),
-                       help="the test the log holds (sets '# test')")
+    # no argparse choices: the reader checks the name against every registered test kind
+    # (a plug-in's too) and names the close ones
+    group.add_argument("--test", default=None, metavar="TEST",
+                       help="the test the log holds (sets '# test'): stiffness, kinematic_error, running_torque, "
+                            "breakaway, or a registered kind")
     group.add_argument("--ratio", default=None, type=float, metavar="N", help="transmission ratio (sets '# ratio')")
     group.add_argument("--rated-torque", default=None, type=float, metavar="T_N",
                        help="rated torque [N·m] (sets '# rated_torque_Nm')")

@@ -80,7 +80,7 @@ from __future__ import annotations
 from typing import ClassVar
 
 from hdsim.errors import InputError, SolverError
-from hdsim.identification import running_diagnosis  # noqa: F401  (registers the running-torque kind)
+from hdsim.identification import breakaway, running_diagnosis  # noqa: F401  (register their test kinds)
 from hdsim.identification.confidence import diagnosis_confidence
 from hdsim.identification.engine import Candidate, Diagnosis, Step
 from hdsim.identification.fit import (Evaluator, build_model, check_nested, fit, fit_many, make_problem,

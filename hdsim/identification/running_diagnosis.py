@@ -42,7 +42,7 @@ from hdsim.errors import InputError
 from hdsim.identification.engine import Candidate, Diagnosis, Step
 from hdsim.identification.policy import Thresholds
 from hdsim.identification.residuals import EXPLAINED_RATIO, whiteness
-from hdsim.identification.running_fit import RunningFit, SweepRecord, fit_running, running_plausibility
+from hdsim.identification.running_fit import SweepRecord, fit_running, running_plausibility
 from hdsim.identification.test_kinds import TestKind, register_test_kind, test_kind
 from hdsim.io.measurement import Measurement
 from hdsim.model.running_terms import RUNNING_FAMILIES, parse_running_effects
@@ -151,10 +151,16 @@ register_test_kind(RunningTorqueTest())
 class RunningSession:
     """A running-torque test's fits for one sweep: the law is linear in its amplitudes once
     the non-linear parameters are fixed, so every candidate is fitted afresh
-    (`hdsim.identification.running_fit.fit_running`)."""
+    (`hdsim.identification.running_fit.fit_running`).
+
+    A kind whose model is fitted the same way (a least-squares torque law on the rows a
+    record moves) derives from it and gives its own `fit_model`, `family_id`, record and
+    folds (`hdsim.identification.breakaway`)."""
 
     one_rate = False
     fold_rule = "first and second half of every plateau"
+    #: the families in the model may take other shapes of their own (the proxy test)
+    widens = True
 
     def __init__(self, meas, chosen: dict):
         self.record = meas if isinstance(meas, SweepRecord) else SweepRecord.of(meas)
@@ -163,12 +169,24 @@ class RunningSession:
         self.folds = _halves(self.record)
         self.passes = 0
 
+    def fit_model(self, families, rows=None, widened=()):
+        """The law with ``families`` fitted on ``rows`` (default every moving row)."""
+        return fit_running(self.record, families, rows=rows, widened=widened)
+
+    def family_id(self, family: str) -> str:
+        return RUNNING_FAMILIES[family].id
+
+    @property
+    def floor(self) -> float:
+        """The record's model-free torque noise on the file's side [N·m]."""
+        return self.record.noise_floor * abs(self.record.side_factor)
+
     def baseline(self) -> Step:
         families = list(self.chosen)
-        return Step(families, fit_running(self.record, families), _holdout_rss(self.record, families, self.folds))
+        return Step(families, self.fit_model(families), self._holdout_rss(families))
 
     def entry_forms(self, family: str) -> tuple:
-        return (RUNNING_FAMILIES[family].id,)
+        return (self.family_id(family),)
 
     def other_forms(self, current, done) -> list:
         return []  # the families' other shapes enter the acceptance rule instead (its proxy test)
@@ -178,14 +196,14 @@ class RunningSession:
         out = []
         for family, effect_id, _ in trials:
             try:
-                out.append(_try(self.record, step, family, self.folds, at_floor))
+                out.append(self._try(step, family, at_floor))
             except InputError as exc:  # a candidate that cannot be fitted is rejected, never the end
                 out.append(Candidate.failed(family, effect_id, str(exc)))
         return out
 
     def explained(self, step: Step) -> dict:
         if "whiteness" not in step.memo:
-            step.memo["whiteness"] = _explained(step.fit)
+            step.memo["whiteness"] = _explained(step.fit, self.floor)
         return step.memo["whiteness"]
 
     def confidence(self, steps) -> dict:
@@ -194,12 +212,74 @@ class RunningSession:
     def findings(self, step) -> list:
         return []
 
+    def _holdout_rss(self, families, widened=()) -> list[float] | None:
+        """Held-out RSS of each fold; None when a half is too short to fit."""
+        out = []
+        for fit_rows, test_rows in zip(*self.folds):
+            try:
+                fit = self.fit_model(families, rows=fit_rows, widened=widened)
+            except InputError:
+                return None
+            r = fit.residual[test_rows & fit.record.moving]
+            out.append(float(r @ r))
+        return out
 
-def _explained(fit: RunningFit) -> dict:
+    def _share(self, before, after) -> float:
+        """Share of the residual variance above the noise floor that ``after`` removes from ``before``."""
+        missing = before.rss - self.floor ** 2 * before.n
+        return min(max((before.rss - after.rss) / missing, 0.0), 1.0) if missing > 0 else 0.0
+
+    def _proxy_gains(self, current: Step, family: str) -> list[float] | None:
+        """Held-out gains of ``family`` over the model whose families may take their other shapes
+        (None when the model has no family to widen)."""
+        if not current.effects or not self.widens:
+            return None
+        if "widened" not in current.memo:  # the same for every candidate of the round: computed once
+            current.memo["widened"] = self._holdout_rss(current.effects, widened=current.effects)
+        both = self._holdout_rss(current.effects + [family], widened=current.effects)
+        return _gains(both, current.memo["widened"]) or [0.0]
+
+    def _try(self, current: Step, family: str, at_floor: bool, thresholds: Thresholds = RUNNING_THRESHOLDS):
+        """Fit the model of ``current`` plus ``family`` and apply the acceptance rule."""
+        families = current.effects + [family]
+        fit = self.fit_model(families)
+        base = current.fit
+        n_eff = fit.n_eff
+        score = float(fit.bic(n_eff) - base.bic(n_eff))
+        share = float(self._share(base, fit))
+        held = self._holdout_rss(families)  # the next step's folds if it is added
+        gains = _gains(held, current.fold_fits)
+        cand = Candidate(family, self.family_id(family), fit, fold_fits=held, score=score, n_eff=n_eff,
+                         holdout_gain=gains, share=share,
+                         figures={"rmse_Nm": fit.rmse_Nm, "share_explained": share})
+        bar = thresholds.floor_holdout_gain if at_floor else thresholds.holdout_gain
+        if not gains:
+            cand.reason = "the record is too short to hold half of each part out: nothing is added unvalidated"
+        elif score >= thresholds.score and min(gains) < thresholds.strong_holdout_gain:
+            cand.reason = f"the BIC changes by {score:+.3g}; it must fall by more than {-thresholds.score:g}"
+        elif min(gains) < bar:
+            cand.reason = (f"it predicts the held-out halves better by {100 * min(gains):.1f} %, less than "
+                           f"{100 * bar:.0f} %" + (" (the rms is at the noise floor already)" if at_floor else ""))
+        elif share < thresholds.min_share:
+            cand.reason = (f"it removes {100 * share:.0f} % of the residual above the noise floor, less than "
+                           f"{100 * thresholds.min_share:.0f} %: a patch for another family's form, not a missing "
+                           "family")
+        else:
+            proxy = self._proxy_gains(current, family)
+            if proxy is not None and min(proxy) < thresholds.proxy_holdout_gain:
+                cand.reason = (f"a proxy: once {', '.join(current.effects)} may take other shapes of their own, "
+                               f"it predicts held-out halves better by {100 * min(proxy):.1f} % only (less than "
+                               f"{100 * thresholds.proxy_holdout_gain:.0f} %)")
+            else:
+                cand.accepted = True
+                cand.reason = f"removes {100 * share:.0f} % of the residual above the noise floor"
+        return cand
+
+
+def _explained(fit, floor: float) -> dict:
     """Whiteness of the residual, judged against the record's model-free noise floor."""
     r = fit.residual[fit.rows]
     w = whiteness(r)
-    floor = abs(fit.record.side_factor) * fit.record.noise_floor
     # the rms about zero, not about the mean: a torque model has no offset, and a level that
     # differs between directions shows as a mean
     rms = fit.rmse_Nm
@@ -210,7 +290,7 @@ def _explained(fit: RunningFit) -> dict:
             "explained": bool(white or ratio <= EXPLAINED_RATIO)}
 
 
-def _halves(rec: SweepRecord) -> list[np.ndarray]:
+def _halves(rec: SweepRecord) -> tuple[list, list]:
     """Two folds: the first and the second half of every plateau; ramps train both, test neither."""
     first = np.zeros(rec.speed.size, dtype=bool)
     second = np.zeros_like(first)
@@ -222,78 +302,11 @@ def _halves(rec: SweepRecord) -> list[np.ndarray]:
     return [first | ramps, second | ramps], [second, first]
 
 
-def _holdout_rss(rec, families, folds, widened=()) -> list[float] | None:
-    """Held-out RSS of each fold; None when a half is too short to fit."""
-    train, test = folds
-    out = []
-    for fit_rows, test_rows in zip(train, test):
-        try:
-            fit = fit_running(rec, families, rows=fit_rows, widened=widened)
-        except InputError:
-            return None
-        r = fit.residual[test_rows & rec.moving]
-        out.append(float(r @ r))
-    return out
-
-
 def _gains(held, before) -> list[float]:
     """Relative fall of the held-out RSS per fold ([] when either could not be held out)."""
     if held is None or before is None:
         return []
     return [1.0 - h / b if b > 0 else 0.0 for h, b in zip(held, before)]
-
-
-def _share(rec, before: RunningFit, after: RunningFit) -> float:
-    """Share of the residual variance above the noise floor that ``after`` removes from ``before``."""
-    missing = before.rss - (rec.noise_floor * abs(rec.side_factor)) ** 2 * before.n
-    return min(max((before.rss - after.rss) / missing, 0.0), 1.0) if missing > 0 else 0.0
-
-
-def _proxy_gains(rec, current: Step, family: str, folds) -> list[float] | None:
-    """Held-out gains of ``family`` over the model whose families may take their other shapes
-    (None when the model has no family to widen)."""
-    if not current.effects:
-        return None
-    if "widened" not in current.memo:  # the same for every candidate of the round: computed once
-        current.memo["widened"] = _holdout_rss(rec, current.effects, folds, widened=current.effects)
-    both = _holdout_rss(rec, current.effects + [family], folds, widened=current.effects)
-    return _gains(both, current.memo["widened"]) or [0.0]
-
-
-def _try(rec, current: Step, family: str, folds, at_floor: bool,
-         thresholds: Thresholds = RUNNING_THRESHOLDS) -> Candidate:
-    """Fit the model of ``current`` plus ``family`` and apply the running-torque acceptance rule."""
-    families = current.effects + [family]
-    fit = fit_running(rec, families)
-    base = current.fit
-    n_eff = fit.n_eff
-    score = float(fit.bic(n_eff) - base.bic(n_eff))
-    share = float(_share(rec, base, fit))
-    held = _holdout_rss(rec, families, folds)  # the next step's folds if it is added
-    gains = _gains(held, current.fold_fits)
-    cand = Candidate(family, RUNNING_FAMILIES[family].id, fit, fold_fits=held, score=score, n_eff=n_eff,
-                     holdout_gain=gains, share=share, figures={"rmse_Nm": fit.rmse_Nm, "share_explained": share})
-    bar = thresholds.floor_holdout_gain if at_floor else thresholds.holdout_gain
-    if not gains:
-        cand.reason = "the plateaus are too short to hold half of each out: nothing is added unvalidated"
-    elif score >= thresholds.score and min(gains) < thresholds.strong_holdout_gain:
-        cand.reason = f"the BIC changes by {score:+.3g}; it must fall by more than {-thresholds.score:g}"
-    elif min(gains) < bar:
-        cand.reason = (f"it predicts held-out halves of the plateaus better by {100 * min(gains):.1f} %, less than "
-                       f"{100 * bar:.0f} %" + (" (the rms is at the noise floor already)" if at_floor else ""))
-    elif share < thresholds.min_share:
-        cand.reason = (f"it removes {100 * share:.0f} % of the residual above the noise floor, less than "
-                       f"{100 * thresholds.min_share:.0f} %: a patch for another family's form, not a missing family")
-    else:
-        proxy = _proxy_gains(rec, current, family, folds)
-        if proxy is not None and min(proxy) < thresholds.proxy_holdout_gain:
-            cand.reason = (f"a proxy: once {', '.join(current.effects)} may take other shapes of their own, it "
-                           f"predicts held-out halves better by {100 * min(proxy):.1f} % only (less than "
-                           f"{100 * thresholds.proxy_holdout_gain:.0f} %)")
-        else:
-            cand.accepted = True
-            cand.reason = f"removes {100 * share:.0f} % of the residual above the noise floor"
-    return cand
 
 
 def diagnose_running(meas: Measurement | SweepRecord, effects=None, *, families=None,

@@ -20,9 +20,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from hdsim.io.check import Check
-from hdsim.signals import loading_rates, noise_level, rate_groups, torque_legs
+from hdsim.signals import breakaway_episodes, loading_rates, noise_level, rate_groups, torque_legs
 
-__all__ = ["DriveScale", "run_checks", "wrong_test", "import_checks"]
+__all__ = ["DriveScale", "run_checks", "wrong_test", "import_checks", "slipping_starts"]
 
 #: a locked drive twists at most this many times its softest catalog compliance predicts
 #: (K1 over the whole torque swing, plus a generous lost motion) before the record is
@@ -37,7 +37,8 @@ FOLLOW_MIN = 0.5
 #: cannot show a loop at all
 NOISE_WARN, NOISE_FAIL = 0.05, 0.3
 #: identity checks: a fail means the record is not the test it claims
-IDENTITY = ("twist_span", "angle_follows_torque", "kinematic_error_not_zero", "ratio_consistent", "turns_steadily")
+IDENTITY = ("twist_span", "angle_follows_torque", "kinematic_error_not_zero", "ratio_consistent", "turns_steadily",
+            "holds_without_slipping", "broke_away")
 
 
 @dataclass(frozen=True)
@@ -54,6 +55,8 @@ class DriveScale:
         Softest and stiffest catalog stiffness (K1, K3) [N·m/rad].
     running_torque : float
         Catalog no-load running torque on the input at 2000 rpm [N·m] (0: unknown).
+    starting_torque : float
+        Catalog starting torque on the input [N·m] (0: unknown).
     ratio : float
         Transmission ratio [-].
     """
@@ -64,6 +67,7 @@ class DriveScale:
     K_stiff: float
     running_torque: float = 0.0
     ratio: float = 1.0
+    starting_torque: float = 0.0
 
     @classmethod
     def of(cls, model) -> "DriveScale":
@@ -73,10 +77,11 @@ class DriveScale:
 
         catalog = model.provenance.get("catalog") or {}
         K = float(np.max(model.base_stiffness))
+        friction = catalog_values(model)
         return cls(str(model.name), float(np.max(model.drive.rated_torque)),
                    float(catalog.get("K1", K)), float(catalog.get("K3", K)),
-                   float(catalog_values(model)["running_torque_2000rpm"]),
-                   float(np.max(np.abs(model.drive.ratio))))
+                   float(friction["running_torque_2000rpm"]), float(np.max(np.abs(model.drive.ratio))),
+                   float(friction["starting_torque"]))
 
 
 def _rank_correlation(a, b) -> float:
@@ -185,7 +190,8 @@ def _locked_identity(meas, T, drive: DriveScale) -> list[Check]:
     expected = float(np.ptp(T)) / drive.K_soft + LOST_MOTION_ALLOWANCE
     least = float(np.ptp(T)) / drive.K_stiff
     torque_text = f"{np.max(np.abs(T)):.3g} N·m"
-    out = []
+    slip = _slip_after_rest(meas, T, angle, drive)  # the more telling sentence first: it names the test
+    out = [slip] if slip else []
     if span > SPAN_FACTOR * expected:
         out.append(Check("twist_span", "fail", f"the angle spans {_arcmin(span)}, but a locked {drive.name} "
                          f"twists about {_arcmin(expected)} at {torque_text}: this looks like an output "
@@ -210,6 +216,33 @@ def _locked_identity(meas, T, drive: DriveScale) -> list[Check]:
         out.append(Check("angle_follows_torque", "ok", f"the angle follows the torque (rank correlation "
                          f"{rho:.2f})"))
     return out
+
+
+def slipping_starts(time, angle, torque, drive: DriveScale) -> list:
+    """The starts from rest (`hdsim.signals.breakaway_episodes`, output angle and torque) in
+    which the drive broke free: the rest held a third of the torque's swing or more, and the
+    angle then turned far beyond the elastic twist of the torque's change during the motion.
+
+    A locked drive's angle follows its torque, so it never rests while the torque rises; the
+    rests it has (at a turning point of the torque) hold nothing and end in elastic twist."""
+    T = np.asarray(torque, dtype=float)
+    swing = float(np.ptp(T))
+    out = []
+    for start in breakaway_episodes(time, angle, T):
+        elastic = SPAN_FACTOR * float(np.ptp(T[start.onset:start.stop])) / drive.K_soft
+        if start.held_torque >= swing / 3.0 and abs(start.travel) > elastic:
+            out.append(start)
+    return out
+
+
+def _slip_after_rest(meas, T, angle, drive: DriveScale) -> Check | None:
+    """A fail when the drive broke free from rest (`slipping_starts`): a breakaway, not held."""
+    for start in slipping_starts(meas.time, angle, T, drive):
+        return Check("holds_without_slipping", "fail", f"the angle stood still while the torque rose to "
+                     f"{abs(start.torque):.3g} N·m, then turned {_arcmin(abs(start.travel))} at about that torque, "
+                     f"far beyond the elastic twist of a held {drive.name}: the drive broke free, this looks like "
+                     "a breakaway test (--test breakaway)")
+    return None
 
 
 def _kinematic_error_identity(meas, drive: DriveScale) -> list[Check]:

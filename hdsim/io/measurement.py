@@ -2,7 +2,7 @@
 
 The file format (docs/measurements.md)::
 
-    # test: stiffness            <- stiffness | kinematic_error | running_torque (required)
+    # test: stiffness            <- stiffness | kinematic_error | running_torque | breakaway (required)
     # ratio: 100                 <- transmission ratio; required for kinematic_error
     # rated_torque_Nm: 67        <- optional
     time_s,torque_Nm,angle_rad
@@ -14,8 +14,10 @@ The file format (docs/measurements.md)::
 | ``stiffness`` | ``time_s``, ``torque_Nm``, ``angle_rad`` |
 | ``kinematic_error`` | ``time_s``, ``wg_angle_rad``, ``output_angle_rad``, ``torque_Nm`` |
 | ``running_torque`` | ``time_s``, ``wg_angle_rad`` and/or ``output_angle_rad``, ``torque_Nm``; optional ``temperature_C`` |
+| ``breakaway`` | as ``running_torque`` |
 
-A running-torque file (a friction sweep) names the shaft its torque is referred to with
+A running-torque file (a friction sweep) or a breakaway file (the torque raised from rest
+until the drive turns) names the shaft its torque is referred to with
 ``# torque_side: input`` (default) or ``output``; with ``# ratio:`` one angle gives the other.
 
 Angle columns may end in ``_deg``, ``_arcmin``, ``_arcsec`` or ``_rev`` instead of
@@ -50,6 +52,7 @@ from hdsim.atomic import atomic_path
 from hdsim.io.import_options import ImportOptions, RowReport
 from hdsim.io.measurement_checks import (
     RATED_KEYS,
+    ONE_OF,
     OPTIONAL_COLUMNS,
     TESTS,
     complete_angles,
@@ -289,8 +292,8 @@ def make_measurement(
     given = {"time_s": time, "torque_Nm": torque, "angle_rad": angle,
              "output_angle_rad": angle, "wg_angle_rad": wg_angle, "temperature_C": temperature}
     optional = OPTIONAL_COLUMNS.get(test, ())
-    if test == "running_torque" and angle is None and wg_angle is None:
-        raise where.fail("a running_torque measurement needs wg_angle or angle (the output angle)")
+    if test in ONE_OF and angle is None and wg_angle is None:
+        raise where.fail(f"a {test} measurement needs wg_angle or angle (the output angle)")
     data = {}
     for name in TESTS[test]:
         if given[name] is None and name in optional:

@@ -44,16 +44,20 @@ TESTS: dict[str, tuple[str, ...]] = {
     "stiffness": ("time_s", "torque_Nm", "angle_rad"),
     "kinematic_error": ("time_s", "wg_angle_rad", "output_angle_rad", "torque_Nm"),
     "running_torque": ("time_s", "wg_angle_rad", "output_angle_rad", "torque_Nm", "temperature_C"),
+    "breakaway": ("time_s", "wg_angle_rad", "output_angle_rad", "torque_Nm", "temperature_C"),
 }
 
 #: Columns a test may lack: a running-torque test needs one angle (the ratio gives the
 #: other) and may log the temperature.
 OPTIONAL_COLUMNS: dict[str, tuple[str, ...]] = {
     "running_torque": ("wg_angle_rad", "output_angle_rad", "temperature_C"),
+    "breakaway": ("wg_angle_rad", "output_angle_rad", "temperature_C"),
 }
 
-#: Of these, a test needs at least one.
-ONE_OF: dict[str, tuple[str, ...]] = {"running_torque": ("wg_angle_rad", "output_angle_rad")}
+#: Of these, a test needs at least one: the tests of a drive turning with one shaft free
+#: (friction sweep, breakaway ramp), whose torque is referred to the shaft ``# torque_side:`` names.
+ONE_OF: dict[str, tuple[str, ...]] = {"running_torque": ("wg_angle_rad", "output_angle_rad"),
+                                      "breakaway": ("wg_angle_rad", "output_angle_rad")}
 
 #: the tests built in (a registered test kind adds its own; `register_test_columns`)
 _BUILTIN_TESTS = tuple(TESTS)
@@ -311,7 +315,7 @@ def interpret_meta(
         raise where.fail("no '# ratio:' key; a kinematic_error file needs the transmission "
                          "ratio, e.g. '# ratio: 100' (or --ratio 100)")
     side = meta.get("torque_side", "input").strip()
-    if test == "running_torque" and side not in TORQUE_SIDES:
+    if test in ONE_OF and side not in TORQUE_SIDES:
         raise where.fail(f"{origin.get('torque_side', '')}'# torque_side:' is {quote_cell(side)}; expected "
                          "input or output (the shaft the running torque is referred to)")
     rated = None

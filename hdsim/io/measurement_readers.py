@@ -171,9 +171,10 @@ def read_csv(path: str, raw: bytes, columns: dict[str, str] | None,
             continue  # a bare '#' spacer line
         key, sep, value = body.partition(":")
         key = key.strip()
-        if not sep or not key:
-            raise where.fail(f"line {number}: malformed '#' line {quote_cell(stripped, 40)}; "
-                             "expected '# key: value'")
+        if not sep or not key or " " in key:
+            # a free-text note ("# bench 3, after the oil change"): a log written by bench
+            # software keeps it, and nothing in a log needs editing to be read
+            continue
         if key in meta:
             raise where.fail(f"line {number}: '# {key}:' given twice")
         meta[key] = value.strip()

@@ -1,0 +1,407 @@
+"""The breakaway (starting-torque) test kind: the torque raised from rest until the drive turns.
+
+A breakaway record (``# test: breakaway``, docs/measurements.md) holds one or more
+starts of the free shaft from rest, usually each way. What it can tell:
+
+- **the starting torque of each direction**, model-free: the torque at the last row at
+  rest before each start (`hdsim.signals.breakaway_episodes`), averaged per direction,
+  with its uncertainty from the torque noise and the sampling. This is the figure
+  ``fit`` reports (``metrics.starting_torque_forward_Nm`` / ``_reverse_Nm``, positive
+  magnitudes on the file's torque side) beside the catalog's starting torque;
+- **what the torque does once the shaft turns**, by a least-squares law on the rows from
+  each start to the next rest, on the wave-generator shaft::
+
+      T = d·S + J·α + b·ω                        (base: one level S both ways, inertia, viscous)
+        + d·[d < 0]·A                            (asymmetry: the reverse level is S + A)
+        − d·D·(1 − exp(−|ω|/ω_s))                (friction: the Stribeck drop D ≥ 0 after breakaway)
+
+  with ``d`` the direction of the start, ``α`` and ``ω`` from the angle; the last 20 ms
+  at rest before each start enter with ``ω = α = 0``: the torque there is the static level
+  the rest held at its limit, and a drop shows as the distance to the torque at speed. The law is
+  linear in its amplitudes for a fixed ``ω_s``, which is chosen on a log grid, as a
+  friction sweep's law is (`hdsim.identification.running_fit`); the diagnosis is the
+  running-torque test's (`hdsim.identification.running_diagnosis.RunningSession`) on
+  these rows, held out by alternate 10 ms blocks of them.
+
+A record in which the shaft never started from rest is not a breakaway test (its
+identity check ``broke_away`` fails: ``wrong_test``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from hdsim.errors import InputError
+from hdsim.identification.optimizer import FittedRows, effective_n
+from hdsim.identification.running_diagnosis import RunningSession, RunningTorqueTest
+from hdsim.identification.test_kinds import register_test_kind
+from hdsim.io.data_checks import Check, slipping_starts
+from hdsim.io.running_checks import speed_and_acceleration
+from hdsim.model.family import FamilyKnowledge
+from hdsim.signals import breakaway_episodes, noise_level
+
+__all__ = ["BreakawayRecord", "BreakawayFit", "fit_breakaway", "BreakawayTest", "breakaway_checks"]
+
+#: the rows at rest this long before each start enter the fit as the static level [s]
+#: (the same rows `hdsim.signals.breakaway_episodes` averages for the starting torque)
+VERGE_S = 0.02
+#: the Stribeck speeds tried [rad/s on the WG shaft]
+STRIBECK_GRID = np.geomspace(0.3, 300.0, 16)
+
+
+class Asymmetry(FamilyKnowledge):
+    """The starting level differs between the directions."""
+
+    separated_from_any = "more starts in each direction"
+
+
+class StribeckDrop(FamilyKnowledge):
+    """The torque to keep turning falls below the starting torque as the speed rises."""
+
+    separated_from_any = "starts held longer after breakaway, so the shaft reaches speed"
+
+
+FAMILIES = {"asymmetry": Asymmetry, "friction": StribeckDrop}
+FAMILY_IDS = {"asymmetry": "direction_level", "friction": "stribeck_drop"}
+
+
+@dataclass
+class BreakawayRecord:
+    """A breakaway measurement prepared for fitting (all torques on the WG shaft).
+
+    ``side_factor``: file torque = side_factor × WG-shaft torque (1 on the input, the ratio
+    on the output). ``moving``: the rows from each start to its next rest; ``direction``:
+    the direction of the start each row belongs to (0 elsewhere).
+    """
+
+    measurement: object
+    speed: np.ndarray
+    accel: np.ndarray
+    torque: np.ndarray
+    side_factor: float
+    starts: list
+    moving: np.ndarray
+    direction: np.ndarray
+    noise_floor: float
+
+    @classmethod
+    def of(cls, meas) -> "BreakawayRecord":
+        if isinstance(meas, cls):
+            return meas
+        side = float(meas.ratio) if meas.torque_side == "output" else 1.0
+        t = np.asarray(meas.time, dtype=float)
+        wg = np.asarray(meas.wg_angle, dtype=float)
+        torque = np.asarray(meas.torque, dtype=float) / side
+        speed, accel = speed_and_acceleration(t, wg, window_s=0.02)
+        starts = breakaway_episodes(t, wg, torque)
+        moving = np.zeros(t.size, dtype=bool)
+        direction = np.zeros(t.size)
+        verge = max(int(VERGE_S / float(np.median(np.diff(t)))), 3)
+        for s in starts:
+            # the last rows at rest hold the static level at its limit: the law at ω = 0, α = 0
+            held = slice(max(s.rest, s.onset - verge + 1), s.onset + 1)
+            speed[held] = accel[held] = 0.0
+            moving[held.start:s.stop] = True
+            direction[held.start:s.stop] = s.direction
+        return cls(meas, speed, accel, torque, side, starts, moving, direction, noise_level(torque))
+
+    def starting_torques(self) -> dict:
+        """Per direction: the mean starting torque of its starts and its standard
+        uncertainty, on the file's side [N·m]; None for a direction never started."""
+        out = {}
+        for name, sign in (("forward", 1), ("reverse", -1)):
+            own = [s for s in self.starts if s.direction == sign]
+            if not own:
+                out[name] = out[name + "_uncertainty"] = None
+                continue
+            values = np.array([sign * s.torque for s in own]) * abs(self.side_factor)
+            each = np.array([s.uncertainty for s in own]) * abs(self.side_factor)
+            spread = float(np.std(values, ddof=1)) / math.sqrt(values.size) if values.size > 1 else 0.0
+            out[name] = float(np.mean(values))
+            out[name + "_uncertainty"] = math.hypot(float(np.sqrt(np.sum(each ** 2))) / values.size, spread)
+        return out
+
+
+@dataclass
+class BreakawayFit(FittedRows):
+    """The law of a breakaway record fitted on its moving rows (module text)."""
+
+    residual: np.ndarray
+    rows: np.ndarray
+    record: BreakawayRecord
+    families: list = field(default_factory=list)
+    fitted: dict = field(default_factory=dict)
+    uncertainty: dict = field(default_factory=dict)
+    n_params: int = 0
+
+    @property
+    def measurement(self):
+        return self.record.measurement
+
+    def rmse(self, rows=None) -> float:
+        r = self.residual[self.rows if rows is None else rows]
+        return float(np.sqrt(np.mean(r * r))) if r.size else 0.0
+
+    @property
+    def rmse_Nm(self) -> float:
+        return self.rmse()
+
+    @property
+    def n_eff(self) -> float:
+        return effective_n(self.residual[self.rows])
+
+    def bic(self, n_eff: float | None = None) -> float:
+        """``n_eff ln(RSS/n) + k ln n_eff``: the BIC with the residual's effective sample count."""
+        n_eff = self.n_eff if n_eff is None else n_eff
+        return n_eff * math.log(max(self.rss, 1e-300) / max(self.n, 1)) + self.n_params * math.log(n_eff)
+
+    def metrics(self) -> dict:
+        starting = self.record.starting_torques()
+        return {"starting_torque_forward_Nm": starting["forward"],
+                "starting_torque_forward_uncertainty_Nm": starting["forward_uncertainty"],
+                "starting_torque_reverse_Nm": starting["reverse"],
+                "starting_torque_reverse_uncertainty_Nm": starting["reverse_uncertainty"]}
+
+    @property
+    def drive(self):
+        """The default unit (with the record's ratio) whose input friction breaks away at the
+        fitted static level (the mean of the directions) and, with the friction family, drops
+        to the fitted level at speed (its Stribeck speed kept: the drive's law decays as a
+        Gaussian, this fit's as an exponential, so the speed is the scale, not the same curve)."""
+        from hdsim.identification.fit import _unit_model  # the same start as every fit's drive
+
+        base = _unit_model(None, self.measurement)
+        side, f = abs(self.record.side_factor), self.fitted
+        start = (f["level"] + 0.5 * f.get("asymmetry.reverse_excess", 0.0)) / side
+        running = start - f.get("friction.stribeck_drop", 0.0) / side
+        law = base.input_friction.with_updates(starting_torque=start, coulomb_torque=running,
+                                               stribeck_speed=f.get("friction.stribeck_speed",
+                                                                    base.input_friction.stribeck_speed))
+        return base.with_input_friction(law)
+
+    def to_toml(self) -> str:
+        import tomli_w
+
+        doc = {"format": "hdsim-breakaway-fit-1", "test": "breakaway", "source": str(self.measurement.source),
+               "torque_side": self.measurement.torque_side, "effects": list(self.families),
+               "metrics": {k: v for k, v in self.metrics().items() if v is not None},
+               "fitted": self.fitted, "uncertainty": self.uncertainty,
+               "fit": {"rows": self.n, "rmse_Nm": self.rmse_Nm, "n_params": self.n_params}}
+        return "# hdsim breakaway fit: torques on the file's shaft [N·m], speeds on the WG shaft [rad/s]\n" + \
+            tomli_w.dumps(doc)
+
+    def save(self, path):
+        from hdsim.atomic import write_text_atomic
+
+        write_text_atomic(path, self.to_toml())
+        return path
+
+    def summary(self) -> dict:
+        """JSON-ready summary (the ``hdsim fit --json`` object of a breakaway test)."""
+        rec = self.record
+        return {"test": "breakaway", "torque_side": self.measurement.torque_side, "effects": list(self.families),
+                "rows": self.n, "starts": len(rec.starts), "fitted": self.fitted, "uncertainty": self.uncertainty,
+                "metrics": self.metrics(), "rmse_Nm": self.rmse_Nm,
+                "noise_floor_Nm": rec.noise_floor * abs(rec.side_factor),
+                "breakaways": [{"time_s": float(rec.measurement.time[s.onset]),
+                                "direction": "forward" if s.direction > 0 else "reverse",
+                                "torque_Nm": float(s.direction * s.torque * abs(rec.side_factor)),
+                                "uncertainty_Nm": float(s.uncertainty * abs(rec.side_factor))} for s in rec.starts]}
+
+
+def _columns(rec: BreakawayRecord, families, stribeck_speed: float):
+    d, w = rec.direction, rec.speed
+    names, cols, lower = ["level", "inertia", "viscous"], [d, rec.accel, w], [0.0, 0.0, 0.0]
+    if "asymmetry" in families:
+        names.append("asymmetry.reverse_excess")
+        cols.append(d * (d < 0))
+        lower.append(-np.inf)
+    if "friction" in families:
+        names.append("friction.stribeck_drop")
+        cols.append(-d * (1.0 - np.exp(-np.abs(w) / stribeck_speed)))
+        lower.append(0.0)
+    return names, np.column_stack(cols), np.array(lower)
+
+
+def fit_breakaway(record, families=(), rows=None) -> BreakawayFit:
+    """Fit the breakaway law with ``families`` (any of ``asymmetry``, ``friction``) on the
+    moving rows of ``record`` (within ``rows`` when given).
+
+    Raises
+    ------
+    InputError
+        No start from rest, an unknown family, or too few rows to fit.
+    """
+    from scipy.optimize import lsq_linear  # imported here: only a breakaway fit needs it
+
+    rec = BreakawayRecord.of(record)
+    families = list(families)
+    for f in families:
+        if f not in FAMILIES:
+            raise InputError(f"a breakaway test cannot show the {f} family; it shows {', '.join(FAMILIES)}")
+    use = rec.moving if rows is None else rec.moving & np.asarray(rows, dtype=bool)
+    if not rec.starts:
+        raise InputError("the shaft never started from rest: there is no breakaway to fit")
+    grid = STRIBECK_GRID if "friction" in families else STRIBECK_GRID[:1]
+    best = None
+    for ws in grid:
+        names, A, lower = _columns(rec, families, ws)
+        if np.count_nonzero(use) <= A.shape[1] + 1:
+            raise InputError(f"{np.count_nonzero(use)} moving rows: too few to fit {A.shape[1]} parameters")
+        scale = np.sqrt(np.sum(A[use] ** 2, axis=0))
+        scale[scale == 0] = 1.0
+        sol = lsq_linear(A[use] / scale, rec.torque[use], bounds=(lower * scale, np.inf), method="bvls")
+        x = sol.x / scale
+        r = rec.torque[use] - A[use] @ x
+        if best is None or float(r @ r) < best[0]:
+            best = (float(r @ r), ws, names, A, x)
+    _, ws, names, A, x = best
+    side = abs(rec.side_factor)
+    residual = (rec.torque - A @ x) * side
+    n = int(np.count_nonzero(use))
+    sigma2 = best[0] / max(n - len(names), 1)
+    cov = sigma2 * np.linalg.pinv(A[use].T @ A[use])
+    units = {"level": side, "asymmetry.reverse_excess": side, "friction.stribeck_drop": side}
+    fitted = {k: float(v) * units.get(k, 1.0) for k, v in zip(names, x)}
+    uncertainty = {k: float(math.sqrt(max(cov[i, i], 0.0))) * units.get(k, 1.0) for i, k in enumerate(names)}
+    if "friction" in families:
+        fitted["friction.stribeck_speed"] = float(ws)
+    return BreakawayFit(residual, use, rec, families, fitted, uncertainty, len(names) + ("friction" in families))
+
+
+def breakaway_checks(meas, scale) -> tuple[list, dict]:
+    """The model-free checks of a breakaway record: did it break away, where, at what torque
+    against the catalog's starting torque."""
+    rec = BreakawayRecord.of(meas)
+    side = abs(rec.side_factor)
+    checks = []
+    output_torque = np.asarray(meas.torque, dtype=float) * (1.0 if meas.torque_side == "output" else meas.ratio)
+    if scale is not None and not slipping_starts(meas.time, meas.angle, output_torque, scale):
+        rec.starts = []  # rests that held nothing, or ended in an elastic twist: a locked drive
+        checks.append(Check("broke_away", "fail", "the shaft never started from rest (no rest that held the "
+                            "torque followed by a turn beyond the drive's elastic twist): this is not a "
+                            "breakaway test"))
+        return checks, {"starts": 0}
+    where = ", ".join(f"{'forward' if s.direction > 0 else 'reverse'} at {float(meas.time[s.onset]):.3g} s, "
+                      f"{abs(s.torque) * side:.3g} N·m" for s in rec.starts[:6])
+    checks.append(Check("broke_away", "ok", f"{len(rec.starts)} start(s) from rest: {where}"))
+    ways = {s.direction for s in rec.starts}
+    if len(ways) < 2:
+        checks.append(Check("both_directions", "warn", "the shaft started one way only: the other direction's "
+                            "starting torque, and any asymmetry, cannot be told"))
+    catalog = getattr(scale, "starting_torque", 0.0) if scale is not None else 0.0
+    if catalog:
+        mine = rec.starting_torques()
+        seen = [v for k, v in mine.items() if v is not None and not k.endswith("uncertainty")]
+        ratio = max(seen) / (catalog * side)
+        status = "ok" if 0.2 <= ratio <= 5.0 else "warn"
+        checks.append(Check("catalog_starting_torque", status, f"starting torque {max(seen):.3g} N·m is "
+                            f"{ratio:.2g}× the catalog's {catalog * side:.3g} N·m of {scale.name} on the "
+                            f"{meas.torque_side} shaft" + ("" if status == "ok" else
+                                                           ": a torque on the other shaft, or in other units?")))
+    return checks, {"starts": len(rec.starts), "directions": len(ways)}
+
+
+class BreakawayTest(RunningTorqueTest):
+    """The breakaway (starting-torque) test: the torque raised from rest until the drive turns."""
+
+    name = "breakaway"
+
+    def families(self):
+        return dict(FAMILIES)
+
+    def parse_effects(self, effects):
+        if not effects:
+            return {}
+        names = [e.strip() for e in effects.split(",")] if isinstance(effects, str) else list(effects)
+        return {f: FAMILY_IDS.get(f, f) for f in names if f}
+
+    def fit(self, meas, effects=None, *, unit=None):
+        return fit_breakaway(meas, list(self.parse_effects(effects)))
+
+    def fit_summary(self, result, stem, scale) -> dict:
+        summary = result.summary()
+        catalog = getattr(scale, "starting_torque", 0.0) if scale is not None else 0.0
+        summary["metrics"]["catalog_starting_torque_Nm"] = catalog * abs(result.record.side_factor) or None
+        return summary
+
+    def session(self, meas, chosen, *, unit=None, candidates=None, max_steps=None):
+        return BreakawaySession(meas, chosen)
+
+    def diagnose(self, meas, effects=None, *, unit=None, families=None, candidates=None, max_rounds=None,
+                 max_steps=None, log=None):
+        return super(RunningTorqueTest, self).diagnose(meas, effects, unit=unit, families=families,
+                                                       max_rounds=max_rounds, log=log)
+
+    def fit_json(self, fit) -> dict:
+        return {"fitted": fit.fitted, "uncertainty": fit.uncertainty}
+
+    def diagnosis_json(self, diagnosis) -> dict:
+        summary = diagnosis.final.fit.summary()
+        return {"metrics": summary["metrics"], "noise_floor_Nm": summary["noise_floor_Nm"]}
+
+    def checks(self, meas, scale):
+        return breakaway_checks(meas, scale)
+
+    def plausibility(self, fit, scale):
+        return []
+
+    def limits(self, diagnosis_json, data, ranking):
+        out = []
+        if data.get("directions", 2) < 2:
+            out.append("starts in the other direction: an asymmetry needs both")
+        return out + [p["measurement"] for p in diagnosis_json.get("ambiguous", []) if p.get("measurement")]
+
+    def unexplained(self) -> str:
+        return ("the torque after breakaway keeps a structure no breakaway family explains: look at the residual "
+                "against time in the report (a controller that changes the torque, a load on the shaft)")
+
+    def report_figures(self, diagnosis, folder, scale):
+        return []
+
+    def report_sections(self, diagnosis, diagnosis_json):
+        rows = [(k, "—" if v is None else f"{v:.4g}") for k, v in diagnosis_json["metrics"].items()]
+        return [("Starting torque (the file's shaft)", (("figure", "value [N·m]"), rows))]
+
+
+class BreakawaySession(RunningSession):
+    """The running-torque session on a breakaway record's moving rows (module text)."""
+
+    fold_rule = "alternate blocks of 10 ms of the rows each start moves"
+    widens = False
+
+    def __init__(self, meas, chosen: dict):
+        self.record = BreakawayRecord.of(meas)
+        self.measurement = self.record.measurement
+        self.chosen = dict(chosen)
+        self.folds = _blocks(self.record)
+        self.passes = 0
+
+    def fit_model(self, families, rows=None, widened=()):
+        return fit_breakaway(self.record, families, rows=rows)
+
+    def family_id(self, family: str) -> str:
+        return FAMILY_IDS[family]
+
+    @property
+    def floor(self) -> float:
+        return self.record.noise_floor * abs(self.record.side_factor)
+
+
+def _blocks(rec: BreakawayRecord) -> tuple[list, list]:
+    """Two folds of alternate blocks of moving rows, each half the static rows long: each
+    fold holds static rows and rows at speed of every start (a fold of whole starts, or of
+    halves, would leave one fold without the static level and nothing to predict it by)."""
+    rows = np.flatnonzero(rec.moving)
+    t = np.asarray(rec.measurement.time, dtype=float)
+    block = max(int(0.5 * VERGE_S / float(np.median(np.diff(t)))), 2)
+    first = np.zeros(rec.moving.size, dtype=bool)
+    first[rows[(np.arange(rows.size) // block) % 2 == 0]] = True
+    second = rec.moving & ~first
+    return [first, second], [second, first]
+
+
+register_test_kind(BreakawayTest())
