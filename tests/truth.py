@@ -559,6 +559,7 @@ def make_ke_data(
     k1_Nm_per_rad: float = K1_NM_PER_RAD,
     friction_form: str | None = None,
     hardening_form: str | None = None,
+    load_profile: str = "opposing",
 ) -> tuple[dict, dict]:
     """Bench-like kinematic-error test: wave generator driven both ways under load.
 
@@ -600,6 +601,11 @@ def make_ke_data(
         T_N [N·m] and nominal K1 [N·m/rad].
     friction_form, hardening_form : str, optional
         Force a form instead of drawing it.
+    load_profile : str
+        ``opposing`` (above: the load flips with the motion); ``sine``: a load that does
+        not follow the motion and varies slowly by ±50 % about ``T_L``,
+        ``T_L (1 + 0.5 sin(2π t/P + φ))`` with ``P = U(0.3, 0.7)`` of the record and a
+        drawn phase; ``ramp``: a load ramping one way over the record, ``T_L (2 t/t_end − 1)``.
 
     Returns
     -------
@@ -632,11 +638,28 @@ def make_ke_data(
                                             - _log_cosh((t_rev - t) / reversal_s))
     wg = ratio * nominal_out
 
-    def torque(x):
-        return -load * np.tanh((t_rev - x) / reversal_s)
+    if load_profile == "opposing":
+        def torque(x):
+            return -load * np.tanh((t_rev - x) / reversal_s)
 
-    def torque_rate(x):
-        return load / reversal_s / np.cosh((t_rev - x) / reversal_s) ** 2
+        def torque_rate(x):
+            return load / reversal_s / np.cosh((t_rev - x) / reversal_s) ** 2
+    elif load_profile == "sine":
+        period, phase = rng_load.uniform(0.3, 0.7) * t_end, rng_load.uniform(0.0, 2.0 * math.pi)
+
+        def torque(x):
+            return load * (1.0 + 0.5 * np.sin(2.0 * math.pi * x / period + phase))
+
+        def torque_rate(x):
+            return load * 0.5 * 2.0 * math.pi / period * np.cos(2.0 * math.pi * x / period + phase)
+    elif load_profile == "ramp":
+        def torque(x):
+            return load * (2.0 * np.asarray(x) / t_end - 1.0)
+
+        def torque_rate(x):
+            return np.full_like(np.asarray(x, dtype=float), 2.0 * load / t_end)
+    else:
+        raise ValueError(f"unknown load profile {load_profile!r}")
 
     true_T = torque(t)
     twist = simulate_body(params, [0.0, t_rev, t_end], torque, torque_rate, t) \

@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hdsim.errors import InputError
+from hdsim.errors import InputError, unknown_name
 from hdsim.identification.optimizer import FittedRows, effective_n
 from hdsim.identification.running_diagnosis import RunningSession, RunningTorqueTest
 from hdsim.identification.test_kinds import register_test_kind
@@ -317,7 +317,10 @@ class BreakawayTest(RunningTorqueTest):
         if not effects:
             return {}
         names = [e.strip() for e in effects.split(",")] if isinstance(effects, str) else list(effects)
-        return {f: FAMILY_IDS.get(f, f) for f in names if f}
+        for name in names:
+            if name and name not in FAMILIES:
+                raise unknown_name("breakaway family", name, FAMILIES)
+        return {f: FAMILY_IDS[f] for f in names if f}
 
     def fit(self, meas, effects=None, *, unit=None):
         return fit_breakaway(meas, list(self.parse_effects(effects)))

@@ -91,7 +91,7 @@ from hdsim.identification.problem import other_starts
 from hdsim.identification.residuals import findings, whiteness
 from hdsim.identification.selection import TWIST_THRESHOLDS, score_candidate
 from hdsim.identification.test_kinds import TestKind, register_test_kind, test_kind
-from hdsim.io.data_checks import run_checks
+from hdsim.io.data_checks import run_checks, torque_sign_convention
 from hdsim.io.measurement import Measurement
 from hdsim.model import effects as fx
 from hdsim.model.drive import SLOTS
@@ -192,6 +192,9 @@ class TwistTest(TestKind):
 
     def step_figures(self, step) -> dict:
         return {"holdout_rmse_rad": [float(f.rmse(~f.rows)) for f in step.fold_fits]}
+
+    def prepare(self, meas):
+        return torque_sign_convention(meas)
 
     def checks(self, meas, scale):
         return run_checks(meas, scale)

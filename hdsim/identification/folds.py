@@ -19,6 +19,7 @@ __all__ = ["folds", "one_loading_rate", "blocks", "MIN_BLOCKS"]
 
 #: fewer blocks than this cannot be resampled usefully (3 blocks give 10 distinct resamples)
 MIN_BLOCKS = 6
+KE_FOLD_REVOLUTIONS = 10
 
 
 def _legs(meas: Measurement):
@@ -70,7 +71,7 @@ def folds(meas: Measurement) -> tuple[list[np.ndarray], str]:
         # identified): alternate blocks of ten wave-generator revolutions
         wg = np.asarray(meas.wg_angle, dtype=float)
         travel = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(wg)))])
-        block = (travel // (10 * 2 * np.pi)).astype(int)
+        block = (travel // (KE_FOLD_REVOLUTIONS * 2 * np.pi)).astype(int)
         if block.max() >= 3:
             masks = [block % 2 == 0, block % 2 == 1]
             return masks, "alternate blocks of ten wave-generator revolutions"

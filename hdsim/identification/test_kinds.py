@@ -150,6 +150,11 @@ class TestKind:
                 f"{whiteness['rms_over_noise']:.1f}× the noise floor): the model still misses an effect "
                 "that no family in the library explains, or explains only in part; this is not a success")
 
+    def prepare(self, meas) -> tuple[object, list]:
+        """The record in the kind's conventions, and the checks that say what was changed
+        (none by default); `hdsim.fit` and `hdsim.diagnose` fit the record it returns."""
+        return meas, []
+
     def checks(self, meas, scale) -> tuple[list, dict]:
         """The model-free checks of a record (`hdsim.io.data_checks.Check`) and the figures
         of its data summary (none by default)."""

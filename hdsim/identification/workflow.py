@@ -38,8 +38,9 @@ def examine(meas: Measurement, scale: DriveScale) -> tuple[list, dict, str]:
     test kind's (`TestKind.checks`). The data summary holds ``rows``, ``dropped_rows`` and
     the kind's figures (noise floors, reversals, loading rates, speeds …).
     """
+    meas, turned = test_kind(meas.test).prepare(meas)
     checks, figures = test_kind(meas.test).checks(meas, scale)
-    checks = import_checks(meas) + list(checks)
+    checks = import_checks(meas) + list(turned) + list(checks)
     data = {"rows": len(meas), "dropped_rows": meas.rows.dropped_rows, **figures}
     return checks, data, wrong_test(checks)
 
@@ -165,6 +166,7 @@ def diagnose(measurement: Measurement, effects=None, *, unit=None, families=None
     checks, data, wrong, scale = examine_record(measurement, unit)
     if wrong:
         return WrongTest(measurement, wrong, checks, data)
+    measurement, _ = kind.prepare(measurement)  # its checks are among the record's
     result = kind.diagnose(measurement, effects, unit=unit, families=families, candidates=candidates,
                            max_rounds=max_rounds, max_steps=max_steps, log=log)
     summary = result.to_json()
@@ -181,4 +183,5 @@ def fit(measurement: Measurement, effects=None, *, unit=None):
     ``.drive`` is the `HarmonicDrive` carrying everything fitted, which `run_scenario`
     and `sobol` take as it is.
     """
-    return test_kind(measurement.test).fit(measurement, effects, unit=unit)
+    kind = test_kind(measurement.test)
+    return kind.fit(kind.prepare(measurement)[0], effects, unit=unit)

@@ -22,7 +22,8 @@ import numpy as np
 from hdsim.io.check import Check
 from hdsim.signals import breakaway_episodes, loading_rates, noise_level, rate_groups, torque_legs
 
-__all__ = ["DriveScale", "run_checks", "wrong_test", "import_checks", "slipping_starts"]
+__all__ = ["DriveScale", "run_checks", "wrong_test", "import_checks", "slipping_starts", "twist_slope",
+           "torque_sign_convention"]
 
 #: a locked drive twists at most this many times its softest catalog compliance predicts
 #: (K1 over the whole torque swing, plus a generous lost motion) before the record is
@@ -243,6 +244,60 @@ def _slip_after_rest(meas, T, angle, drive: DriveScale) -> Check | None:
                      f"far beyond the elastic twist of a held {drive.name}: the drive broke free, this looks like "
                      "a breakaway test (--test breakaway)")
     return None
+
+
+def twist_slope(meas) -> tuple[float, float]:
+    """The angle's slope against the torque [rad/(N·m)] and its t-statistic, model-free.
+
+    Locked test: the angle regressed on the torque and an offset. Kinematic-error test:
+    the kinematic error regressed on the torque, an offset and the first
+    four orders of the wave-generator angle and the first of the output's, so that the
+    kinematic error itself does not pass for a twist. A drive twists with its load:
+    the slope is positive (the compliance) in the file's convention, whatever the drive.
+    """
+    T = np.asarray(meas.torque, dtype=float)
+    if meas.test == "kinematic_error":
+        y = np.asarray(meas.kinematic_error, dtype=float)
+        wg = np.asarray(meas.wg_angle, dtype=float)
+        columns = [T, np.ones_like(T)]  # no drift term: the model has none, a ramped load would pass for one
+        for phase in [k * wg for k in (1, 2, 3, 4)] + [wg / meas.ratio]:
+            columns += [np.cos(phase), np.sin(phase)]
+    else:
+        y = np.asarray(meas.angle, dtype=float)
+        columns = [T, np.ones_like(T)]
+    X = np.column_stack(columns)
+    coef, *_ = np.linalg.lstsq(X, y, rcond=None)
+    r = y - X @ coef
+    dof = max(y.size - X.shape[1], 1)
+    # the residual is correlated: scale the variance by the effective sample count
+    rho = float(np.clip(np.corrcoef(r[1:], r[:-1])[0, 1], 0.0, 0.999)) if r.size > 2 and np.ptp(r) > 0 else 0.0
+    cov = float(r @ r) / dof * np.linalg.pinv(X.T @ X) * (1.0 + rho) / (1.0 - rho)
+    se = math.sqrt(max(cov[0, 0], 0.0))
+    return float(coef[0]), float(coef[0] / se) if se > 0 else 0.0
+
+
+def torque_sign_convention(meas):
+    """The record with its torque in the convention of the contract (positive torque, positive
+    twist), and the check that says whether it was turned: a torque that the angle falls
+    with, clearly (t < −5, `twist_slope`), was logged with the other sign (the torque the
+    drive delivers rather than the load it carries, or a sensor mounted the other way), and
+    is negated; a fit would otherwise run the stiffness to its bound (no compliance)."""
+    if float(np.ptp(np.asarray(meas.torque, dtype=float))) <= 0:
+        return meas, []
+    slope, t_stat = twist_slope(meas)
+    if t_stat < -5.0:
+        from dataclasses import replace
+
+        return replace(meas, torque=-np.asarray(meas.torque, dtype=float)), [Check(
+            "torque_sign", "warn", f"the angle falls as the torque rises (slope {slope:.3g} rad/(N·m), t = "
+            f"{t_stat:.0f}): the torque was logged with the other sign (the torque the drive delivers, not the "
+            "load on it); it is negated for the fits")]
+    if abs(t_stat) < 3.0:
+        return meas, [Check("twist_under_load", "warn", f"the angle does not follow the torque clearly (t = "
+                            f"{t_stat:.1f}): a load that hardly varies twists the drive by a constant, which "
+                            "the encoder offset takes; the stiffness is not determined by this record (a run "
+                            "under a load that varies, or both directions under load, determines it)")]
+    return meas, [Check("torque_sign", "ok", f"the angle rises with the torque (t = {t_stat:.0f})")]
 
 
 def _kinematic_error_identity(meas, drive: DriveScale) -> list[Check]:
