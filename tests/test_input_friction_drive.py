@@ -155,10 +155,14 @@ def test_a_fitted_drive_carries_the_law_on_the_input_shaft(output_side_fit):
     # what a no-load sweep cannot see stays the drive's
     assert law.load_coefficient == unit.input_friction.load_coefficient
     assert law.velocity_scale == unit.input_friction.velocity_scale
-    # the fit reports on the file's side: N times the drive's input-side law over the record's plateaus
-    speed = np.abs(fit.record.speed[fit.record.steady(1)])
-    on_input = np.mean(law.coulomb_torque + law.viscous * speed)
-    assert fit.metrics()["running_torque_forward_Nm"] == pytest.approx(RATIO * on_input, rel=1e-6)
+    # the fit reports on the file's side: the measured running torque over whole WG turns is N times
+    # the drive's input-side law at the plateau speeds, each weighted by its whole turns (within the
+    # noise and the cogging left over a handful of turns)
+    x = fit.record.measurement.wg_angle
+    own = [seg for seg in fit.record.segments if seg.speed > 0]
+    turns = [np.floor(abs(x[seg.stop - 1] - x[seg.start]) / (2 * np.pi)) for seg in own]
+    on_input = np.average([law.coulomb_torque + law.viscous * seg.speed for seg in own], weights=turns)
+    assert fit.metrics()["running_torque_forward_Nm"] == pytest.approx(RATIO * on_input, rel=0.01)
     assert fit.drive_for("CSG-20-100").name == "CSG-20-100"
 
 
@@ -199,7 +203,9 @@ def test_sobol_studies_the_fitted_input_friction(output_side_fit):
 def test_a_batch_of_input_friction_laws_breaks_away_law_by_law():
     """The starting torque of a study's batch (each row its own F_s) is each row's own."""
     drive = hdsim.load_unit().without("friction", "backlash")
-    scenario = short_sweep(metrics=["starting_torque", "backdriving_torque"])
+    # the breakaway metrics come from their own torque ramps, not from the sweep's signals:
+    # one cruise speed instead of two (the same values, 40 % less time)
+    scenario = short_sweep(metrics=["starting_torque", "backdriving_torque"], **{"input.speeds_rpm": [2000.0]})
     batch = hdsim.run_scenario(drive.with_updates({"input_friction.starting_torque": [0.05, 0.09]}), scenario)
     single = hdsim.run_scenario(drive.with_updates({"input_friction.starting_torque": 0.09}), scenario)
     assert batch.metrics["starting_torque_mNm"][1] == single.metric("starting_torque_mNm")

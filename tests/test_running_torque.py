@@ -144,12 +144,15 @@ def test_the_fit_recovers_the_law_that_made_the_data():
     assert fit.inertia == pytest.approx(2e-5, rel=0.05)
     amplitudes = dict(zip(law.ripple_orders, law.ripple_amplitudes))
     assert amplitudes[2.0] == pytest.approx(0.12, rel=0.03) and amplitudes[1.0] == pytest.approx(0.05, rel=0.05)
-    # the contract's metrics: mean torque magnitude on the plateaus of each direction
+    # the contract's metrics: the running torque of each direction over whole WG turns, where the
+    # ripple averages out: in closed form the plateaus' ripple-free law, each weighted by its whole turns
     rec = fit.record
+    x = rec.measurement.wg_angle
     for name, direction in (("running_torque_forward_Nm", 1), ("running_torque_reverse_Nm", -1)):
-        rows = rec.steady(direction)
-        expected = np.mean(np.abs(FULL.torque(rec.speed[rows], rec.measurement.wg_angle[rows])))
-        assert fit.metrics()[name] == pytest.approx(expected, rel=0.01)
+        own = [s for s in rec.segments if np.sign(s.speed) == direction]
+        turns = [math.floor(abs(x[s.stop - 1] - x[s.start]) / (2 * math.pi)) for s in own]
+        levels = [direction * FULL.running_torque(s.speed) for s in own]
+        assert fit.metrics()[name] == pytest.approx(np.average(levels, weights=turns), rel=0.01)
 
 
 def test_an_output_side_record_gives_the_same_law_and_torques_times_the_ratio():
@@ -279,3 +282,22 @@ def test_a_running_fit_file_is_not_taken_for_a_drive(tmp_path):
     path = fit_running(law_record(FULL, fs=300.0), ["friction"]).save(tmp_path / "sweep.fit.toml")
     with pytest.raises(InputError, match="paste its \\[input_friction\\] table"):
         load_fitted(path)
+
+
+def test_ripple_and_starting_torque_are_torques_on_the_files_shaft_with_uncertainty():
+    # the law's amplitudes are fractions of F_c = 0.05 N·m on the input; the file logs the output (× N)
+    fit = fit_running(law_record(FULL, side="output", noise=1e-4 * RATIO), ["friction", "damping", "ripple"])
+    summary = fit.summary()
+    ripple = {r["order"]: r["amplitude_Nm"] for r in summary["ripple_Nm"]}
+    assert ripple[2.0] == pytest.approx(RATIO * 0.05 * 0.12, rel=0.05)
+    assert ripple[1.0] == pytest.approx(RATIO * 0.05 * 0.05, rel=0.1)
+    # F_s = 0.09 N·m on the input; its uncertainty is given, and covers the error
+    derived = summary["derived"]
+    assert derived["starting_torque_Nm"] == pytest.approx(RATIO * 0.09, rel=0.05)
+    assert 0 < derived["starting_torque_uncertainty_Nm"] < 0.05 * derived["starting_torque_Nm"]
+    # the scenario table keeps fractions of the level, and its key says so; the old key is still read
+    table = summary["law"]
+    assert table["ripple_amplitudes_of_level"][:2] == pytest.approx([0.05, 0.12], rel=0.1)  # orders 1, 2 (and 4: ~0)
+    old = for_unit(load_unit(), {"ripple_orders": [2.0], "ripple_amplitudes": [0.1], "ripple_phases": [0.0]})
+    new = for_unit(load_unit(), {"ripple_orders": [2.0], "ripple_amplitudes_of_level": [0.1], "ripple_phases": [0.0]})
+    assert old.ripple_amplitudes == new.ripple_amplitudes == (0.1,)

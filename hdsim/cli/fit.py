@@ -123,16 +123,29 @@ def _print_twist(meas, result, summary) -> None:
 
 
 def _print_torque(meas, result, summary) -> None:
-    m = summary["metrics"]
-    print(f"{meas.source}: {meas.test} test, {len(meas)} rows, torque on the {meas.torque_side}, effects "
-          f"{', '.join(result.families) or '(base: one Coulomb level)'}")
+    side = meas.torque_side
+    print(f"{meas.source}: {meas.test} test, {len(meas)} rows, torque on the {side} shaft, effects "
+          f"{', '.join(result.families) or '(base model)'}")
     print(f"  rms error {summary['rmse_Nm']:.3g} N·m (noise floor {summary['noise_floor_Nm']:.3g} N·m)")
-    levels = {k: "not run" if v is None else f"{v:.4g} N·m" for k, v in m.items()}
-    print(f"  running torque forward {levels['running_torque_forward_Nm']}, reverse "
-          f"{levels['running_torque_reverse_Nm']}")
-    for name, value in summary["law"].items():
-        print(f"  {name:<24} {value}")
-    print(f"  fitted law: {summary['parameters_file']}; figures: {', '.join(summary['figures'])}")
+    for name, value in summary["metrics"].items():
+        shown = "not run" if value is None else f"{value:.4g}"
+        print(f"  {name:<40} {shown}")
+    derived = summary.get("derived", {})
+    if derived.get("starting_torque_Nm") is not None:
+        sigma = derived.get("starting_torque_uncertainty_Nm")
+        print(f"  starting torque (the law at rest)          {derived['starting_torque_Nm']:.4g} ± "
+              f"{'?' if sigma is None else f'{sigma:.2g}'} N·m on the {side} shaft")
+    for way, basis in summary.get("running_torque_basis", {}).items():
+        print(f"  running torque {way}: {basis}")
+    for ripple in summary.get("ripple_Nm", []):
+        print(f"  ripple at order {ripple['order']:.4g} of the WG angle: {ripple['amplitude_Nm']:.3g} N·m on the "
+              f"{side} shaft")
+    for name, value in summary.get("law", summary.get("fitted", {})).items():
+        shown = (", ".join(f"{v:.4g}" for v in value) if isinstance(value, list)
+                 else f"{value:.4g}" if isinstance(value, float) else str(value))
+        print(f"  {name:<28} {shown}")
+    figures = f"; figures: {', '.join(summary['figures'])}" if summary.get("figures") else ""
+    print(f"  fitted parameters: {summary['parameters_file']}{figures}")
 
 
 #: console formats by the error a test kind fits (an angle, or a torque)

@@ -35,7 +35,7 @@ import numpy as np
 from hdsim.errors import InputError
 from hdsim.identification.optimizer import FittedRows, effective_n
 from hdsim.io.measurement import Measurement
-from hdsim.io.running_checks import Segment, sweep_kinematics
+from hdsim.io.running_checks import Segment, running_levels, sweep_kinematics
 from hdsim.model.input_friction import InputFriction
 from hdsim.model.running_terms import BASE_TERM, RUNNING_FAMILIES, PositionRipple, RunningTerm, unit_law
 from hdsim.signals import noise_level
@@ -187,16 +187,43 @@ class RunningFit(FittedRows):
         return effective_n(self.residual[self.rows])
 
     def metrics(self) -> dict:
-        """``running_torque_forward_Nm`` / ``_reverse_Nm``: the model's mean torque magnitude over the
-        plateaus of each direction (inertia excluded), on the file's side; None for a direction the
-        record never runs in."""
+        """``running_torque_forward_Nm`` / ``_reverse_Nm`` on the file's side: one definition
+        everywhere (checks, fit, diagnosis, report) — the measured torque averaged over the
+        whole WG turns of each direction's plateaus, per unit of angle
+        (`hdsim.io.running_checks.running_levels`): a ripple averages out and no model
+        enters. A direction with plateaus but less than one whole turn gets the fitted law's
+        mean over one turn at its plateau speeds (`running_torque_basis` says which); None
+        for a direction the record never runs in."""
+        return {f"running_torque_{way}_Nm": value for way, (value, _) in self._running_torques().items()}
+
+    def starting_torque(self) -> dict:
+        """The law's starting torque ``F_c + (F_s − F_c)`` on the file's side [N·m] and its
+        standard uncertainty from the fit (a derived figure is never given without it: a
+        Stribeck rise the sweep does not determine makes a starting torque it does not either)."""
+        side = abs(self.record.side_factor)
+        sigma = math.hypot(self.uncertainty.get("base.coulomb_torque", 0.0),
+                           self.uncertainty.get("friction.stribeck_rise", 0.0))
+        return {"starting_torque_Nm": side * float(self.law.starting_torque),
+                "starting_torque_uncertainty_Nm": side * sigma if math.isfinite(sigma) else None}
+
+    def running_torque_basis(self) -> dict:
+        """Direction -> what its running torque rests on (measured turns, or the fitted law)."""
+        return {way: basis for way, (_, basis) in self._running_torques().items() if basis}
+
+    def _running_torques(self) -> dict:
         rec = self.record
         side = abs(rec.side_factor)
+        measured = running_levels(self.measurement.torque, self.measurement.wg_angle, rec.segments)
+        grid = np.linspace(0.0, 2.0 * math.pi, 72, endpoint=False)
         out = {}
-        for name, direction in (("running_torque_forward_Nm", 1), ("running_torque_reverse_Nm", -1)):
-            mask = rec.steady(direction)
-            law_torque = self.law.torque(rec.speed[mask], self.measurement.wg_angle[mask])
-            out[name] = float(side * np.mean(np.abs(law_torque))) if mask.any() else None
+        for way, direction in (("forward", 1), ("reverse", -1)):
+            if measured[way] is not None:
+                out[way] = (measured[way], f"measured over {measured[way + '_turns']} whole WG turn(s)")
+                continue
+            speeds = [s.speed for s in rec.segments if np.sign(s.speed) == direction]
+            law = [np.mean(direction * self.law.torque(np.full(grid.size, w), grid)) for w in speeds]
+            out[way] = ((float(side * np.mean(law)), "the fitted law's mean over one turn (less than one "
+                         "whole turn of steady motion)") if speeds else (None, ""))
         return out
 
     def law_table(self) -> dict:
@@ -207,7 +234,7 @@ class RunningFit(FittedRows):
                 "stribeck_speed_rpm": float(law.stribeck_speed * 30.0 / math.pi),
                 "viscous_Nms": float(law.viscous), "coulomb_asymmetry_Nm": float(law.coulomb_asymmetry),
                 "ripple_orders": [float(k) for k in law.ripple_orders],
-                "ripple_amplitudes": [float(r) for r in law.ripple_amplitudes],
+                "ripple_amplitudes_of_level": [float(r) for r in law.ripple_amplitudes],
                 "ripple_phases": [float(p) for p in law.ripple_phases]}
 
     def summary(self) -> dict:
@@ -226,8 +253,12 @@ class RunningFit(FittedRows):
             "n_params": self.n_params,
             "fitted": {k: float(v) for k, v in self.fitted.items()},
             "uncertainty": {k: float(v) for k, v in self.uncertainty.items() if math.isfinite(v)},
-            "derived": {"inertia_kg_m2": float(self.inertia)},
+            "derived": {"inertia_kg_m2": float(self.inertia), **self.starting_torque()},
             "metrics": self.metrics(),
+            "running_torque_basis": self.running_torque_basis(),
+            "ripple_Nm": [{"order": float(k), "amplitude_Nm": side * a, "phase_rad": float(p)}
+                          for k, a, p in zip(self.law.ripple_orders, self.law.ripple_torques(),
+                                             self.law.ripple_phases)],
             "law": self.law_table(),
             "plateau_speeds_rpm": [float(s.speed * 30.0 / math.pi) for s in self.record.segments],
         }
@@ -482,6 +513,13 @@ def running_plausibility(fit: RunningFit, drive) -> list[dict]:
                     "message": f"the fitted asymmetry {law.coulomb_asymmetry:.3g} N·m and ripple exceed the level "
                                f"{law.coulomb_torque:.3g} N·m: the torque keeps one sign in both directions, an "
                                "offset or a load (gravity, a spring) larger than the friction"})
+    start = fit.starting_torque()
+    if start["starting_torque_uncertainty_Nm"] is None or start["starting_torque_uncertainty_Nm"] > \
+            0.5 * start["starting_torque_Nm"]:
+        out.append({"check": "starting_torque", "status": "warn",
+                    "message": f"the starting torque {start['starting_torque_Nm']:.3g} ± "
+                               f"{start['starting_torque_uncertainty_Nm'] or float('inf'):.2g} N·m rests on a "
+                               "Stribeck rise the sweep does not determine: a breakaway test measures it"})
     for name, value in fit.fitted.items():
         sigma = fit.uncertainty.get(name, 0.0)
         if abs(sigma) > abs(value) and abs(value) > 0:

@@ -30,7 +30,7 @@ from hdsim.io.check import Check
 from hdsim.signals import noise_level
 
 __all__ = ["Segment", "speed_and_acceleration", "sweep_kinematics", "constant_speed_segments", "distinct_speeds",
-           "running_checks", "PLATEAU_TOLERANCE"]
+           "running_checks", "turn_speed", "whole_turns", "turn_mean", "running_levels", "PLATEAU_TOLERANCE"]
 
 #: a plateau: the speed stays within this fraction of its running mean
 PLATEAU_TOLERANCE = 0.05
@@ -80,11 +80,15 @@ def speed_and_acceleration(time, angle, window_s: float = 0.01) -> tuple[np.ndar
 def sweep_kinematics(time, angle) -> tuple[np.ndarray, np.ndarray, list]:
     """Speed, acceleration and plateaus of a sweep.
 
-    The plateaus are found on a speed smoothed over 0.1 s (an encoder's steps make a
-    10 ms derivative useless at a few rad/s); on each plateau, trimmed by that window at
-    both ends, the speed is the slope of the angle fitted over the whole plateau and the
-    acceleration is zero. Elsewhere (the ramps) the 10 ms derivatives stand. A plateau
-    must turn the wave generator by `MIN_TRAVEL` at least.
+    The plateaus are found on a smoothed speed, two ways, and the way that finds more
+    steady rows is kept: a speed smoothed over 0.1 s (an encoder's steps make a 10 ms
+    derivative useless at a few rad/s), and the speed averaged over one wave-generator
+    turn centred on each row (a servo's speed ripples at the orders of the WG angle, with
+    the torque ripple it fights; within 0.1 s at a few hundred rpm that ripple is not
+    averaged out, and the plateau falls into pieces a fraction of a turn long). On each
+    plateau, trimmed by 0.05 s at both ends, the speed is the slope of the angle fitted
+    over the whole plateau and the acceleration is zero. Elsewhere (the ramps) the 10 ms
+    derivatives stand. A plateau must turn the wave generator by `MIN_TRAVEL` at least.
 
     Returns
     -------
@@ -96,18 +100,59 @@ def sweep_kinematics(time, angle) -> tuple[np.ndarray, np.ndarray, list]:
     speed, accel = speed_and_acceleration(t, x)
     smooth, _ = speed_and_acceleration(t, x, window_s=0.1)
     trim = max(int(0.05 / float(np.median(np.diff(t)))), 3)
-    segments = []
-    for seg in constant_speed_segments(t, smooth):
-        start, stop = seg.start + trim, seg.stop - trim
-        if stop - start < 10:
+    best = []
+    for averaged in (smooth, np.where(np.isfinite(turn := turn_speed(t, x)), turn, smooth)):
+        found = []
+        for seg in constant_speed_segments(t, averaged):
+            start, stop = seg.start + trim, seg.stop - trim
+            if stop - start < 10:
+                continue
+            slope = float(np.polyfit(t[start:stop] - t[start], x[start:stop], 1)[0])
+            if abs(slope) * (t[stop - 1] - t[start]) < MIN_TRAVEL:
+                continue  # a slow drift or the crest of a wobble, not a run
+            found.append(Segment(start, stop, slope))
+        if sum(s.stop - s.start for s in found) > sum(s.stop - s.start for s in best):
+            best = found
+    for seg in best:
+        speed[seg.start:seg.stop] = seg.speed
+        accel[seg.start:seg.stop] = 0.0
+    return speed, accel, best
+
+
+def turn_speed(time, angle) -> np.ndarray:
+    """The speed averaged over one wave-generator turn centred on each row [rad/s] (NaN where
+    the record does not hold half a turn of travel on either side)."""
+    t = np.asarray(time, dtype=float)
+    x = np.asarray(angle, dtype=float)
+    travel = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(x)))])
+    lo = np.searchsorted(travel, travel - math.pi, side="right") - 1
+    hi = np.searchsorted(travel, travel + math.pi, side="left")
+    inside = (lo >= 0) & (hi < x.size) & (travel - math.pi >= 0)
+    out = np.full(x.size, np.nan)
+    a, b = lo[inside], hi[inside]
+    span = t[b] - t[a]
+    ok = span > 0
+    out[np.flatnonzero(inside)[ok]] = (x[b] - x[a])[ok] / span[ok]
+    return out
+
+
+def whole_turns(angle, segments, direction: int) -> np.ndarray:
+    """Rows of whole wave-generator turns on the plateaus of one direction (+1 forward, −1
+    reverse): from each plateau's first row, as many whole turns as it holds. Over them a
+    ripple at the orders of the WG angle averages out, so their mean torque is the running
+    torque whatever the ripple (one definition for the checks, the fit's metrics and the
+    figures)."""
+    x = np.asarray(angle, dtype=float)
+    mask = np.zeros(x.size, dtype=bool)
+    for seg in segments:
+        if np.sign(seg.speed) != direction:
             continue
-        slope = float(np.polyfit(t[start:stop] - t[start], x[start:stop], 1)[0])
-        if abs(slope) * (t[stop - 1] - t[start]) < MIN_TRAVEL:
-            continue  # a slow drift or the crest of a wobble, not a run
-        speed[start:stop] = slope
-        accel[start:stop] = 0.0
-        segments.append(Segment(start, stop, slope))
-    return speed, accel, segments
+        gone = np.maximum.accumulate(np.abs(x[seg.start:seg.stop] - x[seg.start]))
+        turns = math.floor(float(gone[-1]) / (2.0 * math.pi)) if gone.size else 0
+        if turns >= 1:
+            end = seg.start + int(np.searchsorted(gone, turns * 2.0 * math.pi))
+            mask[seg.start:end] = True
+    return mask
 
 
 def _odd_below(n: int) -> int:
@@ -160,6 +205,34 @@ def _close(out, t, start, stop, mean, min_duration, min_rows, top):
 
 
 
+def running_levels(torque, angle, segments) -> dict:
+    """The running torque of each direction, model-free: the mean torque magnitude over the
+    whole WG turns of its plateaus (`whole_turns`), per unit of angle (`turn_mean`) [unit of
+    the torque], and the turns it rests on; None for a direction with less than one whole turn."""
+    T = np.asarray(torque, dtype=float)
+    out = {}
+    for name, direction in (("forward", 1), ("reverse", -1)):
+        rows = whole_turns(angle, segments, direction)
+        turns = sum(math.floor(_turns(angle, s)) for s in segments if np.sign(s.speed) == direction)
+        out[name] = turn_mean(direction * T, angle, rows) if rows.any() else None
+        out[name + "_turns"] = int(turns)
+    return out
+
+
+def turn_mean(values, angle, rows) -> float:
+    """The mean of ``values`` over ``rows`` per unit of WG angle, not per sample: a servo runs
+    slower where the torque ripple holds it back, so a time average over whole turns keeps
+    part of the ripple; weighted by each row's angle increment it averages out."""
+    weights = np.abs(np.gradient(np.asarray(angle, dtype=float)))[rows]
+    v = np.asarray(values, dtype=float)[rows]
+    return float(np.average(v, weights=weights)) if weights.sum() > 0 else float(np.mean(v))
+
+
+def _turns(angle, seg) -> float:
+    x = np.asarray(angle, dtype=float)
+    return float(np.abs(x[seg.stop - 1] - x[seg.start])) / (2.0 * math.pi)
+
+
 def distinct_speeds(segments) -> list[float]:
     """The distinct plateau speeds [rad/s], ascending (within a factor `SPEED_STEP` they are one)."""
     speeds = sorted(abs(s.speed) for s in segments)
@@ -198,33 +271,50 @@ def running_checks(meas, drive) -> tuple[list, dict]:
     speeds = distinct_speeds(segments)
     reversals = int(sum(np.sign(a.speed) != np.sign(b.speed) for a, b in zip(segments, segments[1:])))
     data.update(plateaus=len(segments), speeds_rpm=[v * RPM_PER_RAD_S for v in speeds], reversals=reversals)
-    checks.append(Check("turns_steadily", "ok", f"{len(segments)} plateaus of constant speed at "
-                         f"{', '.join(f'{v * RPM_PER_RAD_S:.3g}' for v in speeds)} rpm of the wave generator"))
+    steady_rows = sum(s.stop - s.start for s in segments)
+    checks.append(Check("turns_steadily", "ok", f"{len(segments)} plateau(s) of constant speed at "
+                         f"{', '.join(f'{v * RPM_PER_RAD_S:.3g}' for v in speeds)} rpm of the wave generator: "
+                         f"{steady_rows} of {torque.size} rows; the rest (ramps, rests, idle legs) enter the "
+                         "fit only where the drive moves"))
     levels = [float(np.median(torque[s.start:s.stop])) for s in segments]
     follows = [np.sign(level) == np.sign(s.speed) for level, s in zip(levels, segments)]
+    directions = {int(np.sign(s.speed)) for s in segments}
     if np.mean(follows) < 0.75:
         checks.append(Check("torque_opposes_motion", "warn", f"the torque has the sign of the motion on "
                              f"{sum(follows)} of {len(follows)} plateaus: an offset or a load larger than the "
                              "friction, or the torque's sign convention is the other way"))
+    elif len(directions) < 2:
+        checks.append(Check("torque_opposes_motion", "ok", "the torque has the sign of the motion (one direction "
+                             "recorded: whether it reverses with the direction is not seen)"))
     else:
         checks.append(Check("torque_opposes_motion", "ok", "the torque changes sign with the direction"))
+    run = running_levels(torque, meas.wg_angle, segments)
+    data.update({f"running_torque_{k}_Nm" if not k.endswith("turns") else f"running_torque_{k}": v
+                 for k, v in run.items()})
+    shown = [f"{run[w]:.4g} N·m {w} over {run[w + '_turns']} whole WG turn(s)" for w in ("forward", "reverse")
+             if run[w] is not None]
+    short = [w for w, d in (("forward", 1), ("reverse", -1)) if d in directions and run[w] is None]
+    checks.append(Check("running_torque", "warn" if short else "ok", "running torque on the "
+                         f"{meas.torque_side} shaft: " + ("; ".join(shown) or "none") + (
+                             f"; {' and '.join(short)}: less than one whole WG turn of steady motion, so its "
+                             "running torque is the fitted law's mean over a turn" if short else "")))
     if len(speeds) < 2:
         checks.append(Check("speeds", "warn", "one running speed: a loss that grows with speed (damping) "
                              "cannot be told from a constant level (friction); record at least three speeds"))
     else:
         checks.append(Check("speeds", "ok", f"{len(speeds)} distinct speeds"))
-    directions = {int(np.sign(s.speed)) for s in segments}
     checks.append(Check("reversals", "ok" if len(directions) == 2 else "warn",
                          f"{reversals} reversals" if len(directions) == 2 else
                          "one direction only: a level that differs between directions cannot be seen"))
-    checks.append(_sideCheck(meas, drive, levels))
+    whole = [abs(v) for w in ("forward", "reverse") if (v := run[w]) is not None]
+    checks.append(_sideCheck(meas, drive, whole or [abs(v) for v in levels]))
     if meas.temperature is not None:
         span = float(np.ptp(meas.temperature))
         data["temperature_span_K"] = span
         checks.append(Check("temperature", "warn" if span > TEMPERATURE_SPAN else "ok",
                              f"the temperature spans {span:.3g} K" + (": grease friction changes with it; "
                              "the fit assumes one temperature" if span > TEMPERATURE_SPAN else "")))
-    level = float(np.median(np.abs(levels)))
+    level = float(np.mean(whole)) if whole else float(np.median(np.abs(levels)))
     checks.append(Check("torque_noise", "warn" if noise > NOISE_SHARE * level else "ok",
                          f"torque noise {noise:.3g} N·m against a running level of {level:.3g} N·m"))
     return checks, data
@@ -238,7 +328,7 @@ def _sideCheck(meas, drive, levels):
         return Check("torque_side", "ok", "no catalog running torque to compare with")
     side = meas.torque_side
     expected = catalog * (ratio if side == "output" else 1.0)
-    level = float(np.median(np.abs(levels)))
+    level = float(np.mean(np.abs(levels)))
     factor = level / expected if expected > 0 else math.inf
     if factor > SIDE_FACTOR or factor < 1.0 / SIDE_FACTOR:
         other = "output" if side == "input" else "input"

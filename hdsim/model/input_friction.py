@@ -149,6 +149,11 @@ class InputFriction(Parameters):
             m = m + r * np.cos(k * angle + p)
         return m
 
+    def ripple_torques(self) -> tuple:
+        """The ripple amplitudes as torques on the WG shaft [N·m]: ``F_c r_k`` (the law keeps
+        them as fractions ``r_k`` of the Coulomb level; this is the one conversion)."""
+        return tuple(float(np.max(np.asarray(self.coulomb_torque))) * float(r) for r in self.ripple_amplitudes)
+
     def torque(self, speed, angle, mesh_torque=0.0):
         """Friction torque opposing the WG speed.
 
@@ -314,7 +319,10 @@ _CATALOG_KEYS = ("starting_torque_Nm", "running_torque_Nm", "coulomb_share")
 #: keys that replace one field each: key -> (field, conversion to SI)
 _FIELD_KEYS = {"stribeck_speed_rpm": ("stribeck_speed", rpm_to_rad_per_s), "viscous_Nms": ("viscous", float),
                "coulomb_asymmetry_Nm": ("coulomb_asymmetry", float), "load_coefficient": ("load_coefficient", float)}
-_RIPPLE_KEYS = ("ripple_orders", "ripple_amplitudes", "ripple_phases")
+#: the ripple lists by table key -> law field: the amplitudes are fractions of the Coulomb level,
+#: and the key says so (``ripple_amplitudes``, the field's own name, is still read)
+_RIPPLE_KEYS = {"ripple_orders": "ripple_orders", "ripple_amplitudes_of_level": "ripple_amplitudes",
+                "ripple_amplitudes": "ripple_amplitudes", "ripple_phases": "ripple_phases"}
 TABLE_KEYS = ("model", *_CATALOG_KEYS, *_FIELD_KEYS, *_RIPPLE_KEYS)
 
 
@@ -352,8 +360,9 @@ def apply_table(law: InputFriction, table: dict) -> InputFriction:
     and ``coulomb_share`` [-] re-derive ``F_s``, ``F_c`` and ``b`` as `from_catalog` does,
     a key left out keeping the law's own value; then ``stribeck_speed_rpm`` [rpm],
     ``viscous_Nms`` [N·m·s/rad], ``coulomb_asymmetry_Nm`` [N·m], ``load_coefficient`` [-] and
-    the ripple lists ``ripple_orders`` [-], ``ripple_amplitudes`` [-], ``ripple_phases``
-    [rad] replace one field each. An empty table returns ``law`` itself.
+    the ripple lists ``ripple_orders`` [-], ``ripple_amplitudes_of_level`` [-, fractions of
+    the Coulomb level; ``ripple_amplitudes`` is read too], ``ripple_phases`` [rad] replace
+    one field each. An empty table returns ``law`` itself.
 
     Raises
     ------
@@ -367,12 +376,12 @@ def apply_table(law: InputFriction, table: dict) -> InputFriction:
     for key, (name, convert) in _FIELD_KEYS.items():
         if key in table:
             changes[name] = convert(table[key])
-    for key in _RIPPLE_KEYS:
+    for key, name in _RIPPLE_KEYS.items():
         if key in table:
             value = table[key]
             if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
                 raise InputError(f"input_friction.{key} must be a list of numbers")
-            changes[key] = tuple(float(v) for v in value)
+            changes[name] = tuple(float(v) for v in value)
     return law.with_updates(**changes) if changes else law
 
 

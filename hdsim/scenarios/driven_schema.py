@@ -56,7 +56,8 @@ DRIVEN_SCHEMA = {
         "stribeck_speed_rpm": float,
         "viscous_Nms": float,
         "ripple_orders": list,
-        "ripple_amplitudes": list,
+        "ripple_amplitudes_of_level": list,  # fractions of the Coulomb level
+        "ripple_amplitudes": list,   # the same (the law field's own name)
         "ripple_phases": list,
         "coulomb_asymmetry_Nm": float,  # forward level minus the mean level
         "load_coefficient": float,   # mesh loss per unit of transmitted torque (efficiency under load)
