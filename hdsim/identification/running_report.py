@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from hdsim.identification.report_page import new_figure, save
+from hdsim.io.running_checks import turn_mean, whole_turns
 
 __all__ = ["torque_vs_speed", "ripple_vs_angle", "fit_figures", "running_figures", "running_sections"]
 
@@ -50,9 +51,15 @@ def torque_vs_speed(fit, path, catalog_running_torque: float | None = None) -> P
     torque = np.asarray(rec.measurement.torque, dtype=float)
     fig = new_figure((7, 4.5))
     ax = fig.subplots()
+    # each plateau's running torque as the metrics define it (whole WG turns, per unit of angle),
+    # so the points are the fit's numbers; a plateau shorter than a turn shows its plain mean
     speeds = np.array([s.speed for s in rec.segments])
-    levels = np.array([np.mean(torque[s.start:s.stop]) for s in rec.segments])
-    ax.plot(speeds * RPM, levels, "o", color="0.3", label="measured, plateau means")
+    angle = rec.measurement.wg_angle
+    levels = []
+    for seg in rec.segments:
+        rows = whole_turns(angle, [seg], int(np.sign(seg.speed)))
+        levels.append(turn_mean(torque, angle, rows) if rows.any() else float(np.mean(torque[seg.start:seg.stop])))
+    ax.plot(speeds * RPM, levels, "o", color="0.3", label="measured, each plateau over whole WG turns")
     top = max(float(np.max(np.abs(speeds))), 1e-6)
     w = np.concatenate([-np.geomspace(top, 1e-3 * top, 200), np.geomspace(1e-3 * top, top, 200)])
     ax.plot(w * RPM, side * fit.law.running_torque(w), "-", label=f"fitted law ({'+'.join(fit.families) or 'base'})")
@@ -60,6 +67,8 @@ def torque_vs_speed(fit, path, catalog_running_torque: float | None = None) -> P
         cat = side * catalog_running_torque
         ax.plot([2000.0, -2000.0], [cat, -cat], "s", mfc="none", color="C3", label="catalog, 2000 rpm, +20 °C")
     ax.axhline(0.0, color="0.8", lw=0.6)
+    # symmetric log: a 28 rpm plateau and the Stribeck rise below it stay apart from 0
+    ax.set_xscale("symlog", linthresh=max(0.5 * float(np.min(np.abs(speeds))) * RPM, 1e-3))
     ax.set_xlabel("wave-generator speed [rpm]")
     ax.set_ylabel(f"torque on the {rec.measurement.torque_side} [N·m]")
     ax.set_title("running torque vs speed")
