@@ -261,7 +261,7 @@ def test_halves_too_short_to_fit_add_nothing_unvalidated():
     session.folds = ([empty, empty], [empty, empty])  # nothing to fit a half on
     assert session._holdout_rss([]) is None
     step = Step([], fit_running(session.record, []), None)
-    cand = session._try(step, "friction", at_floor=False)
+    cand = session._try(step, "friction", "stribeck", ["stribeck"], at_floor=False)
     assert not cand.accepted and "too short" in cand.reason
 
 
@@ -301,3 +301,38 @@ def test_ripple_and_starting_torque_are_torques_on_the_files_shaft_with_uncertai
     old = for_unit(load_unit(), {"ripple_orders": [2.0], "ripple_amplitudes": [0.1], "ripple_phases": [0.0]})
     new = for_unit(load_unit(), {"ripple_orders": [2.0], "ripple_amplitudes_of_level": [0.1], "ripple_phases": [0.0]})
     assert old.ripple_amplitudes == new.ripple_amplitudes == (0.1,)
+
+
+def test_a_position_torque_is_the_same_both_ways_and_averages_out_over_a_turn():
+    law = FULL.with_updates(position_orders=(2.0,), position_amplitudes=(0.01,), position_phases=(0.5,))
+    theta = np.linspace(0.0, 2 * math.pi, 73)
+    for w in (30.0, -30.0):  # added as it is in both directions: not signed by the motion
+        added = law.torque(np.full(theta.size, w), theta) - FULL.torque(np.full(theta.size, w), theta)
+        assert added == pytest.approx(0.01 * np.cos(2.0 * theta + 0.5), abs=1e-15)
+    assert law.running_torque(30.0) == FULL.running_torque(30.0)
+    table = for_unit(load_unit(), {"position_torque_orders": [2.0], "position_torque_amplitudes_Nm": [0.01],
+                                   "position_torque_phases": [0.5]})
+    assert (table.position_orders, table.position_amplitudes, table.position_phases) == ((2.0,), (0.01,), (0.5,))
+
+
+def test_the_fit_recovers_a_position_torque_in_its_own_form():
+    law = FULL.with_updates(ripple_orders=(), ripple_amplitudes=(), ripple_phases=(), position_orders=(1.0, 2.0),
+                            position_amplitudes=(0.004, 0.009), position_phases=(0.3, -1.0))
+    fit = fit_running(law_record(law), ["friction", "damping", "position_torque"])
+    assert fit.forms["ripple"] == "position_torque" and fit.rmse_Nm < 1e-3
+    amplitudes = dict(zip(fit.law.position_orders, fit.law.position_amplitudes))
+    assert amplitudes[2.0] == pytest.approx(0.009, rel=0.03) and amplitudes[1.0] == pytest.approx(0.004, rel=0.05)
+    # the modulated form cannot take it: it reverses with the motion
+    other = fit_running(law_record(law), ["friction", "damping", "ripple"])
+    assert other.rmse_Nm > 3 * fit.rmse_Nm
+
+
+def test_a_diagnosis_tells_the_ripple_forms_apart_with_both_directions():
+    law = FULL.with_updates(ripple_orders=(), ripple_amplitudes=(), ripple_phases=(), position_orders=(2.0,),
+                            position_amplitudes=(0.008,), position_phases=(0.4,))
+    result = diagnose_running(law_record(law, noise=5e-4), ["friction", "damping"])
+    assert result.added == ["ripple"]
+    chosen = next(c for c in result.steps[0].candidates if c.family == "ripple")
+    assert chosen.effect == "position_torque"
+    modulated = diagnose_running(law_record(FULL, noise=5e-4), ["friction", "damping"])
+    assert next(c for c in modulated.steps[0].candidates if c.family == "ripple").effect == "ripple"

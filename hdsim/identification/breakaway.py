@@ -383,11 +383,15 @@ class BreakawaySession(RunningSession):
         self.folds = _blocks(self.record)
         self.passes = 0
 
-    def fit_model(self, families, rows=None, widened=()):
-        return fit_breakaway(self.record, families, rows=rows)
+    def fit_model(self, ids, rows=None, widened=()):
+        by_id = {v: k for k, v in FAMILY_IDS.items()}
+        return fit_breakaway(self.record, [by_id.get(i, i) for i in ids], rows=rows)
 
     def family_id(self, family: str) -> str:
         return FAMILY_IDS[family]
+
+    def forms(self, family: str) -> tuple:
+        return (FAMILY_IDS[family],)
 
     @property
     def floor(self) -> float:

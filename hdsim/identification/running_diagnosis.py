@@ -45,7 +45,7 @@ from hdsim.identification.residuals import EXPLAINED_RATIO, whiteness
 from hdsim.identification.running_fit import SweepRecord, fit_running, running_plausibility
 from hdsim.identification.test_kinds import TestKind, register_test_kind, test_kind
 from hdsim.io.measurement import Measurement
-from hdsim.model.running_terms import RUNNING_FAMILIES, parse_running_effects
+from hdsim.model.running_terms import RUNNING_FAMILIES, RUNNING_FORMS, parse_running_effects, parse_running_forms
 
 __all__ = ["RunningTorqueTest", "RunningSession", "diagnose_running", "running_limits", "RUNNING_THRESHOLDS"]
 
@@ -79,10 +79,10 @@ class RunningTorqueTest(TestKind):
         return all(set(a["families"]) != set(entry["families"]) for a in kept)
 
     def parse_effects(self, effects):
-        return {f: RUNNING_FAMILIES[f].id for f in parse_running_effects(effects)}
+        return parse_running_forms(effects)
 
     def fit(self, meas, effects=None, *, unit=None):
-        return fit_running(meas, parse_running_effects(effects))
+        return fit_running(meas, list(parse_running_forms(effects).values()))
 
     def fit_summary(self, result, stem, scale) -> dict:
         from hdsim.identification.running_report import fit_figures
@@ -176,17 +176,26 @@ class RunningSession:
     def family_id(self, family: str) -> str:
         return RUNNING_FAMILIES[family].id
 
+    def forms(self, family: str) -> tuple:
+        """The ids of the forms of ``family`` a candidate enters in (the best passing one stands
+        for the family). A sweep in one direction cannot tell the ripple's forms apart (a
+        torque that reverses with the motion and one that does not are the same there): it
+        enters in its default form, and the outcome says what would tell them apart."""
+        forms = RUNNING_FORMS[family]
+        both_ways = len({np.sign(seg.speed) for seg in self.record.segments}) > 1
+        return tuple(term.id for term in (forms if both_ways else forms[:1]))
+
     @property
     def floor(self) -> float:
         """The record's model-free torque noise on the file's side [N·m]."""
         return self.record.noise_floor * abs(self.record.side_factor)
 
     def baseline(self) -> Step:
-        families = list(self.chosen)
-        return Step(families, self.fit_model(families), self._holdout_rss(families))
+        ids = list(self.chosen.values())
+        return Step(list(self.chosen), self.fit_model(ids), self._holdout_rss(ids))
 
     def entry_forms(self, family: str) -> tuple:
-        return (self.family_id(family),)
+        return self.forms(family)
 
     def other_forms(self, current, done) -> list:
         return []  # the families' other shapes enter the acceptance rule instead (its proxy test)
@@ -194,9 +203,9 @@ class RunningSession:
     def try_models(self, step: Step, trials: list, residual: dict) -> list:
         at_floor = residual["rms_over_noise"] <= EXPLAINED_RATIO
         out = []
-        for family, effect_id, _ in trials:
+        for family, effect_id, model in trials:
             try:
-                out.append(self._try(step, family, at_floor))
+                out.append(self._try(step, family, effect_id, list(model.values()), at_floor))
             except InputError as exc:  # a candidate that cannot be fitted is rejected, never the end
                 out.append(Candidate.failed(family, effect_id, str(exc)))
         return out
@@ -229,27 +238,28 @@ class RunningSession:
         missing = before.rss - self.floor ** 2 * before.n
         return min(max((before.rss - after.rss) / missing, 0.0), 1.0) if missing > 0 else 0.0
 
-    def _proxy_gains(self, current: Step, family: str) -> list[float] | None:
-        """Held-out gains of ``family`` over the model whose families may take their other shapes
-        (None when the model has no family to widen)."""
+    def _proxy_gains(self, current: Step, ids: list) -> list[float] | None:
+        """Held-out gains of the model ``ids`` over the model of ``current`` when its families
+        may take their other shapes (None when the model has no family to widen)."""
         if not current.effects or not self.widens:
             return None
         if "widened" not in current.memo:  # the same for every candidate of the round: computed once
-            current.memo["widened"] = self._holdout_rss(current.effects, widened=current.effects)
-        both = self._holdout_rss(current.effects + [family], widened=current.effects)
+            current.memo["widened"] = self._holdout_rss(list(current.fit.forms.values()), widened=current.effects)
+        both = self._holdout_rss(ids, widened=current.effects)
         return _gains(both, current.memo["widened"]) or [0.0]
 
-    def _try(self, current: Step, family: str, at_floor: bool, thresholds: Thresholds = RUNNING_THRESHOLDS):
-        """Fit the model of ``current`` plus ``family`` and apply the acceptance rule."""
-        families = current.effects + [family]
-        fit = self.fit_model(families)
+    def _try(self, current: Step, family: str, effect_id: str, ids: list, at_floor: bool,
+             thresholds: Thresholds = RUNNING_THRESHOLDS):
+        """Fit the model ``ids`` (``current``'s forms plus ``family`` as ``effect_id``) and apply
+        the acceptance rule."""
+        fit = self.fit_model(ids)
         base = current.fit
         n_eff = fit.n_eff
         score = float(fit.bic(n_eff) - base.bic(n_eff))
         share = float(self._share(base, fit))
-        held = self._holdout_rss(families)  # the next step's folds if it is added
+        held = self._holdout_rss(ids)  # the next step's folds if it is added
         gains = _gains(held, current.fold_fits)
-        cand = Candidate(family, self.family_id(family), fit, fold_fits=held, score=score, n_eff=n_eff,
+        cand = Candidate(family, effect_id, fit, fold_fits=held, score=score, n_eff=n_eff,
                          holdout_gain=gains, share=share,
                          figures={"rmse_Nm": fit.rmse_Nm, "share_explained": share})
         bar = thresholds.floor_holdout_gain if at_floor else thresholds.holdout_gain
@@ -265,7 +275,7 @@ class RunningSession:
                            f"{100 * thresholds.min_share:.0f} %: a patch for another family's form, not a missing "
                            "family")
         else:
-            proxy = self._proxy_gains(current, family)
+            proxy = self._proxy_gains(current, ids)
             if proxy is not None and min(proxy) < thresholds.proxy_holdout_gain:
                 cand.reason = (f"a proxy: once {', '.join(current.effects)} may take other shapes of their own, "
                                f"it predicts held-out halves better by {100 * min(proxy):.1f} % only (less than "
@@ -342,6 +352,9 @@ def running_limits(diagnosis_json: dict, data: dict, ranking: list) -> list[str]
         out.append("a sweep at three or more speeds, a decade apart: with one speed a loss that grows with speed "
                    "cannot be told from a constant friction level")
     if data.get("reversals", 0) < 1:
-        out.append("the same sweep in the other direction: a level that differs between directions needs both")
+        out.append("the same sweep in the other direction: a level that differs between directions needs both"
+                   + (", and so does telling a ripple that reverses with the motion (the friction level "
+                      "modulated) from a position torque that does not (cogging, an unbalance)"
+                      if "ripple" in diagnosis_json.get("added", []) else ""))
     out += [pair["measurement"] for pair in diagnosis_json.get("ambiguous", []) if pair.get("measurement")]
     return out

@@ -37,7 +37,7 @@ from hdsim.identification.optimizer import FittedRows, effective_n
 from hdsim.io.measurement import Measurement
 from hdsim.io.running_checks import Segment, running_levels, sweep_kinematics
 from hdsim.model.input_friction import InputFriction
-from hdsim.model.running_terms import BASE_TERM, RUNNING_FAMILIES, PositionRipple, RunningTerm, unit_law
+from hdsim.model.running_terms import BASE_TERM, RUNNING_FAMILIES, PositionRipple, RunningTerm, running_term, unit_law
 from hdsim.signals import noise_level
 
 __all__ = ["SweepRecord", "Segment", "RunningFit", "fit_running", "running_plausibility"]
@@ -128,10 +128,11 @@ class SweepRecord:
                 mask[s.start:s.stop] = True
         return mask
 
-    def term(self, family: str) -> RunningTerm:
-        """The family's term for this record (the ripple drops the output's order when the
-        output turned less than once: a periodic term would only fit a drift)."""
-        term = RUNNING_FAMILIES[family]
+    def term(self, name: str) -> RunningTerm:
+        """The term of a family (its default form) or a term id, for this record (the ripple
+        drops the output's order when the output turned less than once: a periodic term would
+        only fit a drift)."""
+        term = running_term(name)
         if isinstance(term, PositionRipple) and self.output_turns < 1.0:
             return replace(term, output_order=False)
         return term
@@ -169,6 +170,8 @@ class RunningFit(FittedRows):
     n_params: int
     fitted: dict = field(default_factory=dict)
     uncertainty: dict = field(default_factory=dict)
+    #: family -> the id of its form in the law
+    forms: dict = field(default_factory=dict)
 
     @property
     def measurement(self) -> Measurement:
@@ -235,7 +238,10 @@ class RunningFit(FittedRows):
                 "viscous_Nms": float(law.viscous), "coulomb_asymmetry_Nm": float(law.coulomb_asymmetry),
                 "ripple_orders": [float(k) for k in law.ripple_orders],
                 "ripple_amplitudes_of_level": [float(r) for r in law.ripple_amplitudes],
-                "ripple_phases": [float(p) for p in law.ripple_phases]}
+                "ripple_phases": [float(p) for p in law.ripple_phases],
+                "position_torque_orders": [float(k) for k in law.position_orders],
+                "position_torque_amplitudes_Nm": [float(a) for a in law.position_amplitudes],
+                "position_torque_phases": [float(p) for p in law.position_phases]}
 
     def summary(self) -> dict:
         """JSON-ready summary (the ``hdsim fit --json`` object of a running-torque test)."""
@@ -256,9 +262,13 @@ class RunningFit(FittedRows):
             "derived": {"inertia_kg_m2": float(self.inertia), **self.starting_torque()},
             "metrics": self.metrics(),
             "running_torque_basis": self.running_torque_basis(),
-            "ripple_Nm": [{"order": float(k), "amplitude_Nm": side * a, "phase_rad": float(p)}
-                          for k, a, p in zip(self.law.ripple_orders, self.law.ripple_torques(),
-                                             self.law.ripple_phases)],
+            "ripple_Nm": [{"order": float(k), "amplitude_Nm": side * a, "phase_rad": float(p), "form": form}
+                          for form, orders, amplitudes, phases in (
+                              ("ripple", self.law.ripple_orders, self.law.ripple_torques(), self.law.ripple_phases),
+                              ("position_torque", self.law.position_orders, self.law.position_amplitudes,
+                               self.law.position_phases))
+                          for k, a, p in zip(orders, amplitudes, phases)],
+            "forms": dict(self.forms),
             "law": self.law_table(),
             "plateau_speeds_rpm": [float(s.speed * 30.0 / math.pi) for s in self.record.segments],
         }
@@ -388,8 +398,9 @@ def fit_running(record, families=(), rows=None, widened=()) -> RunningFit:
         The fit; ``prediction`` and ``residual`` cover every row.
     """
     rec = record if isinstance(record, SweepRecord) else SweepRecord.of(record)
-    families = [f for f in RUNNING_FAMILIES if f in set(families)]
-    terms = [BASE_TERM] + [rec.term(f) for f in families]
+    chosen = {running_term(name).family: name for name in families}  # a family, or one of its forms by id
+    families = [f for f in RUNNING_FAMILIES if f in chosen]
+    terms = [BASE_TERM] + [rec.term(chosen[f]) for f in families]
     use = rec.moving if rows is None else rec.moving & np.asarray(rows, dtype=bool)
     if np.count_nonzero(use) < 10:
         raise InputError(f"{rec.measurement.source}: fewer than 10 rows at a steady running speed to fit")
@@ -418,7 +429,8 @@ def fit_running(record, families=(), rows=None, widened=()) -> RunningFit:
     fitted = {f"{_owner_name(o)}.{n}": float(v) for o, n, v in zip(owners, names, x)}
     fitted.update({f"{f}.stribeck_speed": float(v) for f, v in nonlinear.items()})
     sigma = _uncertainty(A[use], y[use] - A[use] @ x, owners, names)
-    return RunningFit(rec, families, law, inertia, prediction, residual, use, n_params, fitted, sigma)
+    return RunningFit(rec, families, law, inertia, prediction, residual, use, n_params, fitted, sigma,
+                      {t.family: t.id for t in terms[1:]})
 
 
 def _law_of(rec: SweepRecord, terms: list, owners: list, names: list, x: np.ndarray, nonlinear: dict):

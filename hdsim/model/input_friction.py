@@ -86,6 +86,9 @@ class InputFriction(Parameters):
     ripple_orders: tuple = ()      # k [-], orders of the WG angle
     ripple_amplitudes: tuple = ()  # r_k [-], relative to F_c
     ripple_phases: tuple = ()      # φ_k [rad]
+    position_orders: tuple = ()      # k [-], orders of the WG angle of the position torque
+    position_amplitudes: tuple = ()  # g_k [N·m]: a torque that does not reverse with the motion
+    position_phases: tuple = ()      # ψ_k [rad]
     coulomb_asymmetry: float = param("direction asymmetry Δ: forward level F_c + Δ, reverse F_c − Δ", "N·m",
                                      -np.inf, default=0.0)
     load_coefficient: float = param("mesh friction μ per unit of mesh torque on the WG shaft", "-", default=0.0)
@@ -105,13 +108,17 @@ class InputFriction(Parameters):
         if not len(self.ripple_orders) == len(self.ripple_amplitudes) == len(self.ripple_phases):
             raise InputError("input_friction ripple_orders, ripple_amplitudes and ripple_phases "
                              "must have the same length")
-        ripple = [*self.ripple_orders, *self.ripple_amplitudes, *self.ripple_phases]
+        if not len(self.position_orders) == len(self.position_amplitudes) == len(self.position_phases):
+            raise InputError("input_friction position_orders, position_amplitudes and position_phases "
+                             "must have the same length")
+        ripple = [*self.ripple_orders, *self.ripple_amplitudes, *self.ripple_phases, *self.position_orders,
+                  *self.position_amplitudes, *self.position_phases]
         try:
             finite = np.all(np.isfinite(np.asarray(ripple, dtype=float)))
         except (TypeError, ValueError):
             finite = False
         if not finite:
-            raise InputError("input_friction ripple_orders, ripple_amplitudes and ripple_phases "
+            raise InputError("input_friction ripple and position-torque orders, amplitudes and phases "
                              "must be finite numbers")
 
     @property
@@ -149,6 +156,21 @@ class InputFriction(Parameters):
             m = m + r * np.cos(k * angle + p)
         return m
 
+    def position_torque(self, angle):
+        """The additive position torque ``Σ g_k cos(kθ + ψ_k)`` [N·m]: periodic in the WG angle
+        and the same in both directions (a motor's cogging, an unbalance), so conservative: it
+        takes over a turn what it gives back, and a running torque averages it out.
+
+        Parameters
+        ----------
+        angle : float or array
+            WG angle θ [rad].
+        """
+        g = 0.0 * np.asarray(angle, dtype=float)
+        for k, a, p in zip(self.position_orders, self.position_amplitudes, self.position_phases):
+            g = g + a * np.cos(k * angle + p)
+        return g
+
     def ripple_torques(self) -> tuple:
         """The ripple amplitudes as torques on the WG shaft [N·m]: ``F_c r_k`` (the law keeps
         them as fractions ``r_k`` of the Coulomb level; this is the one conversion)."""
@@ -175,7 +197,7 @@ class InputFriction(Parameters):
         excess = (self.starting_torque - self.coulomb_torque) * np.exp(-(speed / self.stribeck_speed) ** 2)
         level = (self.coulomb_torque * self.modulation(angle) + excess + self.coulomb_asymmetry * sign
                  + self.load_coefficient * abs(mesh_torque))
-        return level * sign + self.viscous * speed
+        return level * sign + self.viscous * speed + self.position_torque(angle)
 
     def running_torque(self, speed, mesh_torque=0.0):
         """Mean friction over a WG revolution at constant speed (the ripple averages out).
@@ -192,8 +214,8 @@ class InputFriction(Parameters):
         float or array
             Running torque [N·m], signed like the speed.
         """
-        return self.with_updates(ripple_orders=(), ripple_amplitudes=(), ripple_phases=()).torque(
-            speed, 0.0, mesh_torque)
+        return self.with_updates(ripple_orders=(), ripple_amplitudes=(), ripple_phases=(), position_orders=(),
+                                 position_amplitudes=(), position_phases=()).torque(speed, 0.0, mesh_torque)
 
     def with_updates(self, **changes) -> "InputFriction":
         """A copy with fields changed (names checked).
@@ -322,7 +344,9 @@ _FIELD_KEYS = {"stribeck_speed_rpm": ("stribeck_speed", rpm_to_rad_per_s), "visc
 #: the ripple lists by table key -> law field: the amplitudes are fractions of the Coulomb level,
 #: and the key says so (``ripple_amplitudes``, the field's own name, is still read)
 _RIPPLE_KEYS = {"ripple_orders": "ripple_orders", "ripple_amplitudes_of_level": "ripple_amplitudes",
-                "ripple_amplitudes": "ripple_amplitudes", "ripple_phases": "ripple_phases"}
+                "ripple_amplitudes": "ripple_amplitudes", "ripple_phases": "ripple_phases",
+                "position_torque_orders": "position_orders", "position_torque_amplitudes_Nm": "position_amplitudes",
+                "position_torque_phases": "position_phases"}
 TABLE_KEYS = ("model", *_CATALOG_KEYS, *_FIELD_KEYS, *_RIPPLE_KEYS)
 
 
@@ -361,8 +385,9 @@ def apply_table(law: InputFriction, table: dict) -> InputFriction:
     a key left out keeping the law's own value; then ``stribeck_speed_rpm`` [rpm],
     ``viscous_Nms`` [N·m·s/rad], ``coulomb_asymmetry_Nm`` [N·m], ``load_coefficient`` [-] and
     the ripple lists ``ripple_orders`` [-], ``ripple_amplitudes_of_level`` [-, fractions of
-    the Coulomb level; ``ripple_amplitudes`` is read too], ``ripple_phases`` [rad] replace
-    one field each. An empty table returns ``law`` itself.
+    the Coulomb level; ``ripple_amplitudes`` is read too], ``ripple_phases`` [rad], and the
+    position torque's ``position_torque_orders`` [-], ``position_torque_amplitudes_Nm`` [N·m],
+    ``position_torque_phases`` [rad] replace one field each. An empty table returns ``law`` itself.
 
     Raises
     ------

@@ -11,7 +11,8 @@ owns; each term carries its own behaviour (`RunningTerm.columns` and
 | base (always) | ``coulomb`` | ``F_c`` | one level, the same at every speed and both directions |
 | ``friction`` | ``stribeck`` | ``F_s − F_c`` (Stribeck rise at low speed, grid over ``ω_s``), ``Δ`` (forward ≠ reverse) | excess at low speed; a level that depends on the direction |
 | ``damping`` | ``viscous`` | ``b`` | torque growing in proportion to speed |
-| ``ripple`` | ``ripple`` | ``F_c r_k cos φ_k``, ``F_c r_k sin φ_k`` at orders 1, 2, 4 of the WG angle and 1 of the output | torque periodic in angle |
+| ``ripple`` | ``ripple`` | ``F_c r_k cos φ_k``, ``F_c r_k sin φ_k`` at orders 1, 2, 4 of the WG angle and 1 of the output | torque periodic in angle, reversing with the motion |
+| ``ripple`` | ``position_torque`` | ``g_k cos ψ_k``, ``g_k sin ψ_k`` at the same orders, not signed by the motion | torque periodic in angle, the same both ways (cogging) |
 
 The columns are the law itself evaluated with one amplitude set to 1 and the others to 0
 (the law is linear in them), so the fitted model is exactly ``InputFriction.torque``
@@ -38,8 +39,10 @@ from hdsim.errors import InputError, unknown_name
 from hdsim.model.family import FamilyKnowledge
 from hdsim.model.input_friction import InputFriction
 
-__all__ = ["RunningTerm", "CoulombLevel", "StribeckFriction", "ViscousLoss", "PositionRipple",
-           "RUNNING_FAMILIES", "BASE_TERM", "unit_law", "parse_running_effects"]
+__all__ = ["RunningTerm", "CoulombLevel", "StribeckFriction", "ViscousLoss", "PositionRipple", "PositionTorque",
+           "RUNNING_FAMILIES", "RUNNING_FORMS", "BASE_TERM", "unit_law", "parse_running_effects", "parse_running_forms",
+           "running_term",
+           "register_running_term"]
 
 #: orders of the WG angle the ripple term carries (the output's 1× is added as 1/N)
 WG_RIPPLE_ORDERS = (1.0, 2.0, 4.0)
@@ -261,15 +264,65 @@ class PositionRipple(RunningTerm):
         return replace(law, ripple_orders=tuple(orders), ripple_amplitudes=tuple(amps), ripple_phases=tuple(phases))
 
 
+@dataclass(frozen=True)
+class PositionTorque(PositionRipple):
+    """Ripple, its second form: a torque periodic in the WG angle (orders 1, 2, 4, and the
+    output's 1×) that does not reverse with the motion — a motor's cogging, an unbalance,
+    gravity on the output. Added to the law, not modulating its level; amplitudes in N·m.
+
+    With both directions recorded it is told from the modulated form (which reverses with
+    the motion); with one it is not (`hdsim.identification.running_diagnosis`)."""
+
+    id: ClassVar[str] = "position_torque"
+    signature: ClassVar[str] = "torque periodic in angle, the same in both directions"
+
+    def columns(self, speed, angle, velocity_scale, ratio, nonlinear):
+        names, cols = [], []
+        for k in self.orders(ratio):
+            names += [f"position_cos_{k:.6g}", f"position_sin_{k:.6g}"]
+            cols += [np.cos(k * angle), np.sin(k * angle)]
+        n = len(names)
+        return Columns(tuple(names), np.column_stack(cols), (-math.inf,) * n, (math.inf,) * n)
+
+    def other_shapes(self, speed, angle, velocity_scale, ratio, nonlinear):
+        # higher harmonics, and the output's own order (over less than one output turn a slow
+        # drift, the same both ways, which a direction asymmetry of the friction level would
+        # otherwise take); not a constant: that is the asymmetry itself, the same both ways
+        names, cols = [], []
+        for k in (3.0, 6.0, 8.0, 1.0 / abs(ratio)):
+            names += [f"harmonic_cos_{k:.6g}", f"harmonic_sin_{k:.6g}"]
+            cols += [np.cos(k * angle), np.sin(k * angle)]
+        n = len(names)
+        return Columns(tuple(names), np.column_stack(cols), (-math.inf,) * n, (math.inf,) * n)
+
+    def holds(self, law, coefficients):
+        return True  # an additive torque needs no level to ride on
+
+    def write_back(self, law, coefficients, nonlinear):
+        orders, amps, phases = [], [], []
+        for name, a in coefficients.items():
+            part, k = name.split("_")[1:]
+            if part == "cos":
+                b = coefficients[f"position_sin_{k}"]
+                orders.append(float(k))
+                amps.append(math.hypot(a, b))
+                phases.append(math.atan2(-b, a))
+        return replace(law, position_orders=tuple(orders), position_amplitudes=tuple(amps),
+                       position_phases=tuple(phases))
+
+
 #: the base model of a running-torque test
 BASE_TERM = CoulombLevel()
-#: family -> term of a running-torque test (`register_running_term` adds one)
+#: family -> its default term (the first registered form) of a running-torque test
 RUNNING_FAMILIES: dict[str, RunningTerm] = {}
+#: family -> every form of it, the default first (`register_running_term` adds one)
+RUNNING_FORMS: dict[str, tuple[RunningTerm, ...]] = {}
 
 
 def register_running_term(term: RunningTerm) -> RunningTerm:
-    """Make ``term`` the running-torque law's part of its family (as `hdsim.model.effects.register`
-    does for the elastic path's effects); a family registered again is replaced.
+    """Make ``term`` a form of its family in the running-torque law (as `hdsim.model.effects.register`
+    does for the elastic path's effects): the first form registered for a family is its default;
+    a form registered again under the same id is replaced.
 
     Raises
     ------
@@ -278,11 +331,32 @@ def register_running_term(term: RunningTerm) -> RunningTerm:
     """
     if not term.family or not term.id or term.family == BASE_TERM.family:
         raise InputError(f"{type(term).__name__} needs a family and an id other than the base level's")
-    RUNNING_FAMILIES[term.family] = term
+    forms = [t for t in RUNNING_FORMS.get(term.family, ()) if t.id != term.id]
+    forms.insert(0 if not forms or RUNNING_FAMILIES[term.family].id == term.id else len(forms), term)
+    RUNNING_FORMS[term.family] = tuple(forms)
+    RUNNING_FAMILIES[term.family] = forms[0]
     return term
 
 
-for _term in (StribeckFriction(), ViscousLoss(), PositionRipple()):
+def running_term(name: str) -> RunningTerm:
+    """The term of a family name (its default form) or of a term id (that form).
+
+    Raises
+    ------
+    InputError
+        On a name that is neither.
+    """
+    if name in RUNNING_FAMILIES:
+        return RUNNING_FAMILIES[name]
+    for forms in RUNNING_FORMS.values():
+        for term in forms:
+            if term.id == name:
+                return term
+    raise unknown_name("running-torque family or effect", name,
+                       [*RUNNING_FAMILIES, *(t.id for forms in RUNNING_FORMS.values() for t in forms)])
+
+
+for _term in (StribeckFriction(), ViscousLoss(), PositionRipple(), PositionTorque()):
     register_running_term(_term)
 
 
@@ -294,11 +368,23 @@ def parse_running_effects(text) -> list[str]:
     InputError
         On a name that is neither a running-torque family nor a term id.
     """
+    return list(parse_running_forms(text))
+
+
+def parse_running_forms(text) -> dict[str, str]:
+    """``'friction,position_torque'`` -> family -> term id, in the given order: a family name
+    stands for its default form, a term id (``position_torque``) for that form.
+
+    Raises
+    ------
+    InputError
+        On a name that is neither a running-torque family nor a term id.
+    """
     if text is None:
-        return []
+        return {}
     items = text if isinstance(text, (list, tuple, set, dict)) else str(text).split(",")
-    by_id = {term.id: family for family, term in RUNNING_FAMILIES.items()}
-    out: list[str] = []
+    by_id = {term.id: family for family, forms in RUNNING_FORMS.items() for term in forms}
+    out: dict[str, str] = {}
     for raw in items:
         item = str(raw).strip().partition("=")[0].strip()
         if not item or item == "none":
@@ -309,6 +395,5 @@ def parse_running_effects(text) -> list[str]:
                 raise InputError(f"the {item} family acts in the elastic path and is not part of a running-torque "
                                  f"test; its families are {', '.join(RUNNING_FAMILIES)}")
             raise unknown_name("running-torque family or effect", item, [*RUNNING_FAMILIES, *by_id])
-        if family not in out:
-            out.append(family)
+        out.setdefault(family, RUNNING_FAMILIES[family].id if item == family else item)
     return out

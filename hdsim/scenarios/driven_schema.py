@@ -59,6 +59,9 @@ DRIVEN_SCHEMA = {
         "ripple_amplitudes_of_level": list,  # fractions of the Coulomb level
         "ripple_amplitudes": list,   # the same (the law field's own name)
         "ripple_phases": list,
+        "position_torque_orders": list,         # a torque that does not reverse with the motion (cogging)
+        "position_torque_amplitudes_Nm": list,
+        "position_torque_phases": list,
         "coulomb_asymmetry_Nm": float,  # forward level minus the mean level
         "load_coefficient": float,   # mesh loss per unit of transmitted torque (efficiency under load)
     },

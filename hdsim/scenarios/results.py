@@ -139,12 +139,13 @@ def read_run_file(path) -> tuple[HarmonicDrive, Scenario, SimulationResult, dict
     model = stored_model(unit, params, effects, drive_file)
     if ripple:  # files written before the drive carried its input friction have none
         model = model.with_input_friction(model.input_friction.with_updates(
-            **{k: tuple(float(v) for v in np.atleast_1d(ripple[k])) for k in _RIPPLE_FIELDS}))
+            **{k: tuple(float(v) for v in np.atleast_1d(ripple[k])) for k in _RIPPLE_FIELDS if k in ripple}))
     scenario = Scenario(tomllib.loads(scenario_toml), str(path))
     return model, scenario, result, metrics
 
 
-_RIPPLE_FIELDS = ("ripple_orders", "ripple_amplitudes", "ripple_phases")
+_RIPPLE_FIELDS = ("ripple_orders", "ripple_amplitudes", "ripple_phases", "position_orders", "position_amplitudes",
+                  "position_phases")
 
 
 def _ripple(law) -> dict:
