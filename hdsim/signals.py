@@ -150,6 +150,9 @@ class Breakaway:
         Span of the smoothed torque while the shaft stood: what the rest held.
     travel : float
         The angle turned, signed [unit of the angle].
+    rise_s : float
+        How long the torque took, at rest, to rise from a fifth of its value at the onset to
+        the onset [s]: seconds for a breakaway ramp, a blink for a speed loop breaking free.
     """
 
     direction: int
@@ -160,6 +163,7 @@ class Breakaway:
     uncertainty: float
     held_torque: float
     travel: float
+    rise_s: float = 0.0
 
 
 def angle_resolution(angle) -> float:
@@ -220,7 +224,10 @@ def breakaway_episodes(time, angle, torque, rest_s: float = 0.1) -> list[Breakaw
         rows = slice(max(r0, onset - average + 1), onset + 1)
         span = float(np.ptp(smooth[rows]))
         m = onset + 1 - rows.start
-        out.append(Breakaway(int(np.sign(travel)), r0, onset, stop, float(np.mean(T[rows])),
+        level = float(np.mean(T[rows]))
+        low = np.flatnonzero(np.abs(smooth[r0:onset + 1]) < 0.2 * abs(level))
+        rise = float(t[onset] - t[r0 + low[-1]]) if low.size else float(t[onset] - t[r0])
+        out.append(Breakaway(int(np.sign(travel)), r0, onset, stop, level,
                              math.sqrt(noise ** 2 / m + span ** 2 / 12.0), float(np.ptp(smooth[r0:onset + 1])),
-                             travel))
+                             travel, rise))
     return out

@@ -111,3 +111,12 @@ def test_the_fitted_drive_breaks_away_at_the_measured_level():
     law = result.drive.input_friction
     assert law.starting_torque == pytest.approx(tr["T_s"]["forward"], rel=0.05)
     assert law.coulomb_torque == pytest.approx(tr["T_c"]["forward"], rel=0.15)
+
+
+def test_a_breakaway_labelled_a_friction_sweep_is_the_wrong_test():
+    # its short runs after breakaway can look like plateaus; the torque raised over seconds at
+    # rest before every start cannot (a sweep's speed loop breaks free in a blink)
+    cols, meta, _ = tb.make_breakaway_data(("friction",), seed=1)
+    result = diagnose(make_measurement("running_torque", cols["time_s"], cols["torque_Nm"], None,
+                                       wg_angle=cols["wg_angle_rad"], ratio=100))
+    assert result.outcome == "wrong_test" and "breakaway" in result.to_json()["verdict"]

@@ -6,7 +6,7 @@ against the drive's catalog (docs/measurements.md, "Checks before any fit"):
 
 | check | fail / warn when |
 |---|---|
-| ``turns_steadily`` (identity) | no plateau of constant speed: the drive does not run (a locked or breakaway test) |
+| ``turns_steadily`` (identity) | no plateau of constant speed, or every start follows a torque raised at rest for half a second or more: a locked or breakaway test |
 | ``torque_opposes_motion`` | the torque does not change sign with the direction on most plateaus: an offset or a load larger than the friction |
 | ``speeds`` | one speed only: a viscous loss cannot be told from a Coulomb level |
 | ``reversals`` | one direction only: an asymmetry cannot be seen |
@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hdsim.io.check import Check
-from hdsim.signals import noise_level
+from hdsim.signals import breakaway_episodes, noise_level
 
 __all__ = ["Segment", "speed_and_acceleration", "sweep_kinematics", "constant_speed_segments", "distinct_speeds",
            "running_checks", "turn_speed", "whole_turns", "turn_mean", "running_levels", "PLATEAU_TOLERANCE"]
@@ -40,6 +40,9 @@ MIN_TRAVEL = 1.0
 SPEED_STEP = 1.25
 #: the running level may be this many times the catalog's either way before the side is questioned
 SIDE_FACTOR = 30.0
+#: a torque raised at rest for this long before every start is a breakaway ramp, not a sweep's
+#: speed loop winding up against stiction (tens of milliseconds) [s]
+BREAKAWAY_RISE_S = 0.5
 #: a temperature span above this changes grease friction noticeably [K]
 TEMPERATURE_SPAN = 10.0
 #: torque noise over the running level above which the record says little
@@ -264,6 +267,12 @@ def running_checks(meas, drive) -> tuple[list, dict]:
     data = {"noise_floor_Nm": noise, "torque_noise_Nm": noise}
     _, _, segments = sweep_kinematics(meas.time, meas.wg_angle)
     checks = []
+    starts = breakaway_episodes(meas.time, meas.wg_angle, torque)
+    if starts and all(s.rise_s >= BREAKAWAY_RISE_S for s in starts):
+        checks.append(Check("turns_steadily", "fail", f"every start from rest ({len(starts)}) follows a torque "
+                             f"raised over {min(s.rise_s for s in starts):.2g} s or more while the drive stood: "
+                             "this looks like a breakaway test (--test breakaway), not a friction sweep"))
+        return checks, {**data, "plateaus": len(segments), "speeds_rpm": [], "reversals": 0}
     if not segments:
         checks.append(Check("turns_steadily", "fail", "the drive never turns at a steady speed: this looks like "
                              "a locked (stiffness) or breakaway test, not a friction sweep"))
