@@ -605,7 +605,9 @@ def make_ke_data(
         ``opposing`` (above: the load flips with the motion); ``sine``: a load that does
         not follow the motion and varies slowly by ±50 % about ``T_L``,
         ``T_L (1 + 0.5 sin(2π t/P + φ))`` with ``P = U(0.3, 0.7)`` of the record and a
-        drawn phase; ``ramp``: a load ramping one way over the record, ``T_L (2 t/t_end − 1)``.
+        drawn phase; ``ramp``: a load ramping one way over the record, ``T_L (2 t/t_end − 1)``;
+        ``windup``: a constant load whose transmitted torque steps by ``±f T_L`` with the
+        direction (the friction of an output bearing the sensor sees), ``f = U(0.1, 0.3)``.
 
     Returns
     -------
@@ -652,6 +654,16 @@ def make_ke_data(
 
         def torque_rate(x):
             return load * 0.5 * 2.0 * math.pi / period * np.cos(2.0 * math.pi * x / period + phase)
+    elif load_profile == "windup":
+        # a constant load (gravity, a brake) plus the friction of the drive's output bearing,
+        # which the torque sensor sees: the transmitted torque steps by ±T_f with the direction
+        friction_share = rng_load.uniform(0.1, 0.3)
+
+        def torque(x):
+            return load * (1.0 - friction_share * np.tanh((t_rev - x) / reversal_s))
+
+        def torque_rate(x):
+            return load * friction_share / reversal_s / np.cosh((t_rev - x) / reversal_s) ** 2
     elif load_profile == "ramp":
         def torque(x):
             return load * (2.0 * np.asarray(x) / t_end - 1.0)

@@ -1,11 +1,13 @@
 """The kinematic-error-under-load battery: is the twist under a measured load identified?
 
-    python validation/ke_load_battery.py [--seeds 5] [--first-seed 0] [--workers 2] [--out NAME]
+    python validation/ke_load_battery.py [--seeds 5] [--first-seed 0] [--workers 2] [--only windup] [--out NAME]
 
 Data come from ``tests/truth.py`` (``make_ke_data``: a body ODE of its own, a von-Mises
 2x kinematic-error bump, encoder steps and noise), under three load profiles: ``sine``
 (a load that does not follow the motion, ±50 % about its mean), ``ramp`` (a load ramping
-one way across zero) and ``opposing`` (the load flips with the motion), each logged in
+one way across zero), ``opposing`` (the load flips with the motion) and ``windup`` (a
+constant load whose transmitted torque steps by ±10-30 % with the direction: the friction
+of an output bearing the torque sensor sees), each logged in
 the contract's sign (``+``) and in the other (``-``: the torque the drive delivers).
 Every case runs ``hdsim.diagnose`` with no family given. Per group: how often the
 kinematic error was added first, how often something else was added (spurious), the
@@ -31,7 +33,7 @@ sys.path.insert(0, str(HERE))
 from battery_common import run_in_processes, write_json_atomic  # noqa: E402
 
 GROUPS = {f"{profile}{sign}": (profile, 1.0 if sign == "+" else -1.0)
-          for profile in ("sine", "ramp", "opposing") for sign in "+-"}
+          for profile in ("sine", "ramp", "opposing", "windup") for sign in "+-"}
 
 
 def run_case(group: str, seed: int) -> dict:
@@ -76,8 +78,10 @@ def main(argv=None) -> int:
     ap.add_argument("--first-seed", type=int, default=0)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--out", default="ke_load_battery.json")
+    ap.add_argument("--only", default="", help="comma-separated group prefixes (sine, ramp, opposing, windup)")
     args = ap.parse_args(argv)
-    cases = [(g, s) for g in GROUPS for s in range(args.first_seed, args.first_seed + args.seeds)]
+    groups = [g for g in GROUPS if not args.only or any(g.startswith(x) for x in args.only.split(","))]
+    cases = [(g, s) for g in groups for s in range(args.first_seed, args.first_seed + args.seeds)]
     rows = run_in_processes(run_case, cases, args.workers, "KE under load", failed_row)
     summary = table(rows)
     for group, line in summary.items():
