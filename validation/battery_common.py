@@ -59,3 +59,32 @@ def write_json_atomic(path: Path, obj) -> None:
 
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     write_text_atomic(path, json.dumps(obj, indent=1, default=str))
+
+
+def battery_main(doc: str, groups, run_case, failed_row, table, *, seeds: int, out: str, label: str,
+                 argv=None, here: Path | None = None) -> int:
+    """The command line of a small battery: ``--seeds``, ``--first-seed``, ``--workers``,
+    ``--only`` (group prefixes) and ``--out`` (a name in ``results/``); runs every
+    (group, seed), prints ``table(rows)`` one line per group and writes the rows and the
+    table atomically."""
+    import argparse
+
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
+    ap.add_argument("--seeds", type=int, default=seeds)
+    ap.add_argument("--first-seed", type=int, default=0)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--only", default="", help="comma-separated group prefixes")
+    ap.add_argument("--out", default=out)
+    args = ap.parse_args(argv)
+    chosen = [g for g in groups if not args.only or any(g.startswith(x) for x in args.only.split(","))]
+    cases = [(g, s) for g in chosen for s in range(args.first_seed, args.first_seed + args.seeds)]
+    rows = run_in_processes(run_case, cases, args.workers, label, failed_row)
+    summary = table(rows)
+    for group, line in summary.items():
+        print(f"{group:24s} " + "  ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
+                                          for k, v in line.items()))
+    write_json_atomic((here or Path(__file__).resolve().parent) / "results" / args.out,
+                      {"seeds": [args.first_seed, args.first_seed + args.seeds - 1], "summary": summary,
+                       "rows": rows})
+    return 0
+

@@ -19,7 +19,6 @@ the end (validation/README.md).
 
 from __future__ import annotations
 
-import argparse
 import sys
 import tempfile
 import traceback
@@ -30,7 +29,7 @@ sys.path.insert(0, str(HERE.parent / "tests"))  # truth_breakaway lives with the
 sys.path.insert(0, str(HERE.parent))
 sys.path.insert(0, str(HERE))
 
-from battery_common import run_in_processes, write_json_atomic  # noqa: E402
+from battery_common import battery_main  # noqa: E402
 
 GROUPS = {"nothing": (), "asymmetry": ("asymmetry",), "friction": ("friction",),
           "two:asymmetry+friction": ("asymmetry", "friction")}
@@ -81,21 +80,8 @@ def table(rows: list) -> dict:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seeds", type=int, default=10)
-    ap.add_argument("--first-seed", type=int, default=0)
-    ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--out", default="breakaway_battery.json")
-    args = ap.parse_args(argv)
-    cases = [(g, s) for g in GROUPS for s in range(args.first_seed, args.first_seed + args.seeds)]
-    rows = run_in_processes(run_case, cases, args.workers, "breakaway battery", failed_row)
-    summary = table(rows)
-    for group, line in summary.items():
-        print(f"{group:24s} " + "  ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
-                                          for k, v in line.items()))
-    write_json_atomic(HERE / "results" / args.out, {"seeds": [args.first_seed, args.first_seed + args.seeds - 1],
-                                                    "summary": summary, "rows": rows})
-    return 0
+    return battery_main(__doc__, GROUPS, run_case, failed_row, table, seeds=10, out="breakaway_battery.json",
+                        label="breakaway battery", argv=argv)
 
 
 if __name__ == "__main__":

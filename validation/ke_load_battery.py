@@ -20,7 +20,6 @@ Seeds 0-2 were used while building the torque-sign rule (tuning); the frozen see
 
 from __future__ import annotations
 
-import argparse
 import sys
 import traceback
 from pathlib import Path
@@ -30,7 +29,7 @@ sys.path.insert(0, str(HERE.parent / "tests"))
 sys.path.insert(0, str(HERE.parent))
 sys.path.insert(0, str(HERE))
 
-from battery_common import run_in_processes, write_json_atomic  # noqa: E402
+from battery_common import battery_main  # noqa: E402
 
 GROUPS = {f"{profile}{sign}": (profile, 1.0 if sign == "+" else -1.0)
           for profile in ("sine", "ramp", "opposing", "windup") for sign in "+-"}
@@ -73,23 +72,8 @@ def table(rows: list) -> dict:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seeds", type=int, default=5)
-    ap.add_argument("--first-seed", type=int, default=0)
-    ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--out", default="ke_load_battery.json")
-    ap.add_argument("--only", default="", help="comma-separated group prefixes (sine, ramp, opposing, windup)")
-    args = ap.parse_args(argv)
-    groups = [g for g in GROUPS if not args.only or any(g.startswith(x) for x in args.only.split(","))]
-    cases = [(g, s) for g in groups for s in range(args.first_seed, args.first_seed + args.seeds)]
-    rows = run_in_processes(run_case, cases, args.workers, "KE under load", failed_row)
-    summary = table(rows)
-    for group, line in summary.items():
-        print(f"{group:12s} " + "  ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
-                                          for k, v in line.items()))
-    write_json_atomic(HERE / "results" / args.out, {"seeds": [args.first_seed, args.first_seed + args.seeds - 1],
-                                                    "summary": summary, "rows": rows})
-    return 0
+    return battery_main(__doc__, GROUPS, run_case, failed_row, table, seeds=5, out="ke_load_battery.json",
+                        label="KE under load", argv=argv)
 
 
 if __name__ == "__main__":

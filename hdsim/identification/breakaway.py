@@ -35,8 +35,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hdsim.errors import InputError, unknown_name
-from hdsim.identification.optimizer import FittedRows, effective_n
 from hdsim.identification.running_diagnosis import RunningSession, RunningTorqueTest
+from hdsim.identification.running_fit import TorqueFit
 from hdsim.identification.test_kinds import register_test_kind
 from hdsim.io.data_checks import Check, slipping_starts
 from hdsim.io.running_checks import speed_and_acceleration
@@ -126,7 +126,7 @@ class BreakawayRecord:
 
 
 @dataclass
-class BreakawayFit(FittedRows):
+class BreakawayFit(TorqueFit):
     """The law of a breakaway record fitted on its moving rows (module text)."""
 
     residual: np.ndarray
@@ -136,27 +136,6 @@ class BreakawayFit(FittedRows):
     fitted: dict = field(default_factory=dict)
     uncertainty: dict = field(default_factory=dict)
     n_params: int = 0
-
-    @property
-    def measurement(self):
-        return self.record.measurement
-
-    def rmse(self, rows=None) -> float:
-        r = self.residual[self.rows if rows is None else rows]
-        return float(np.sqrt(np.mean(r * r))) if r.size else 0.0
-
-    @property
-    def rmse_Nm(self) -> float:
-        return self.rmse()
-
-    @property
-    def n_eff(self) -> float:
-        return effective_n(self.residual[self.rows])
-
-    def bic(self, n_eff: float | None = None) -> float:
-        """``n_eff ln(RSS/n) + k ln n_eff``: the BIC with the residual's effective sample count."""
-        n_eff = self.n_eff if n_eff is None else n_eff
-        return n_eff * math.log(max(self.rss, 1e-300) / max(self.n, 1)) + self.n_params * math.log(n_eff)
 
     def metrics(self) -> dict:
         starting = self.record.starting_torques()

@@ -40,7 +40,7 @@ from hdsim.model.input_friction import InputFriction
 from hdsim.model.running_terms import BASE_TERM, RUNNING_FAMILIES, PositionRipple, RunningTerm, running_term, unit_law
 from hdsim.signals import noise_level
 
-__all__ = ["SweepRecord", "Segment", "RunningFit", "fit_running", "running_plausibility"]
+__all__ = ["SweepRecord", "Segment", "TorqueFit", "RunningFit", "fit_running", "running_plausibility"]
 
 #: owner of the columns of a family's other shapes (not in the law)
 SHAPE = "shape"
@@ -138,8 +138,34 @@ class SweepRecord:
         return term
 
 
+class TorqueFit(FittedRows):
+    """A least-squares torque law fitted on the rows a record moves (a sweep's, a breakaway's):
+    its rms error [N·m], effective sample count and BIC (``n_params``: its free parameters)."""
+
+    @property
+    def measurement(self) -> Measurement:
+        return self.record.measurement
+
+    def rmse(self, rows=None) -> float:
+        r = self.residual[self.rows if rows is None else rows]
+        return float(np.sqrt(np.mean(r * r))) if r.size else float("nan")
+
+    @property
+    def rmse_Nm(self) -> float:
+        return self.rmse()
+
+    @property
+    def n_eff(self) -> float:
+        return effective_n(self.residual[self.rows])
+
+    def bic(self, n_eff: float | None = None) -> float:
+        """``n_eff ln(RSS/n) + k ln n_eff``: the BIC with the residual's effective sample count."""
+        n_eff = self.n_eff if n_eff is None else n_eff
+        return n_eff * math.log(max(self.rss, 1e-300) / max(self.n, 1)) + self.n_params * math.log(n_eff)
+
+
 @dataclass
-class RunningFit(FittedRows):
+class RunningFit(TorqueFit):
     """The fitted running-torque law and what the fit says about it.
 
     Attributes
@@ -172,22 +198,6 @@ class RunningFit(FittedRows):
     uncertainty: dict = field(default_factory=dict)
     #: family -> the id of its form in the law
     forms: dict = field(default_factory=dict)
-
-    @property
-    def measurement(self) -> Measurement:
-        return self.record.measurement
-
-    def rmse(self, rows=None) -> float:
-        r = self.residual[self.rows if rows is None else rows]
-        return float(np.sqrt(np.mean(r * r))) if r.size else float("nan")
-
-    @property
-    def rmse_Nm(self) -> float:
-        return self.rmse()
-
-    @property
-    def n_eff(self) -> float:
-        return effective_n(self.residual[self.rows])
 
     def metrics(self) -> dict:
         """``running_torque_forward_Nm`` / ``_reverse_Nm`` on the file's side: one definition
@@ -272,11 +282,6 @@ class RunningFit(FittedRows):
             "law": self.law_table(),
             "plateau_speeds_rpm": [float(s.speed * 30.0 / math.pi) for s in self.record.segments],
         }
-
-    def bic(self, n_eff: float | None = None) -> float:
-        """``n_eff ln(RSS/n) + k ln n_eff``: the BIC with the residual's effective sample count."""
-        n_eff = self.n_eff if n_eff is None else n_eff
-        return n_eff * math.log(max(self.rss, 1e-300) / max(self.n, 1)) + self.n_params * math.log(n_eff)
 
     def to_toml(self) -> str:
         import tomli_w
