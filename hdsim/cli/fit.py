@@ -140,6 +140,8 @@ def _print_torque(meas, result, summary) -> None:
     for ripple in summary.get("ripple_Nm", []):
         print(f"  ripple at order {ripple['order']:.4g} of the WG angle: {ripple['amplitude_Nm']:.3g} N·m on the "
               f"{side} shaft")
+    if "law" in summary:
+        print("  fitted law (wave-generator shaft; pastes into a scenario's [input_friction]):")
     for name, value in summary.get("law", summary.get("fitted", {})).items():
         shown = (", ".join(f"{v:.4g}" for v in value) if isinstance(value, list)
                  else f"{value:.4g}" if isinstance(value, float) else str(value))
