@@ -51,6 +51,17 @@ def test_mkdocs_build_strict_has_no_warnings(tmp_path):
         f"mkdocs build --strict failed (exit {proc.returncode}):\n" + "\n".join(warnings or [log[-3000:]]))
     assert (tmp_path / "site" / "index.html").is_file()
     assert (tmp_path / "site" / "api" / "index.html").is_file()
+    # offline: no page fetches a script or a stylesheet (or a font) from the network, and the
+    # equations are typeset by the vendored MathJax
+    fetched = re.compile(r"""<(?:script|link)\b[^>]*\b(?:src|href)=["']?(?:https?:)?//""", re.IGNORECASE)
+    pages = sorted((tmp_path / "site").rglob("*.html"))
+    remote = [f"{p.relative_to(tmp_path / 'site')}: {m.group(0)}" for p in pages
+              for m in fetched.finditer(p.read_text(encoding="utf-8"))]
+    assert not remote, "pages fetch from the network:\n" + "\n".join(remote[:10])
+    physics = (tmp_path / "site" / "physics" / "index.html").read_text(encoding="utf-8")
+    assert "javascripts/mathjax/es5/tex-mml-chtml.js" in physics
+    assert (tmp_path / "site" / "javascripts" / "mathjax" / "es5" / "output" / "chtml" / "fonts" / "woff-v2"
+            / "MathJax_Main-Regular.woff").is_file()
 
 
 def test_nomenclature_lists_every_parameter_of_the_default_unit():

@@ -14,11 +14,17 @@ window.MathJax = {
   }
 };
 
+// MathJax (vendored in javascripts/mathjax/) may not have loaded yet, or at all (a page
+// opened from disk with scripts blocked): then there is nothing to re-typeset
 if (typeof document$ !== "undefined") {
   document$.subscribe(() => {
-    MathJax.startup.output.clearCache();
-    MathJax.typesetClear();
-    MathJax.texReset();
-    MathJax.typesetPromise();
+    const mj = window.MathJax;
+    if (!mj || !mj.startup || !mj.startup.output || typeof mj.typesetPromise !== "function") {
+      return;
+    }
+    mj.startup.output.clearCache();
+    mj.typesetClear();
+    mj.texReset();
+    mj.typesetPromise();
   });
 }
