@@ -93,8 +93,11 @@ def metrics_as_floats(metrics: dict) -> dict[str, float]:
     return {name: float(np.asarray(value).reshape(-1)[0]) for name, value in metrics.items()}
 
 
-def print_metrics(title: str, metrics: dict[str, float], stream=sys.stdout) -> None:
-    """Print a title and one aligned ``name  value`` line per metric."""
+def print_metrics(title: str, metrics: dict[str, float], stream=None) -> None:
+    """Print a title and one aligned ``name  value`` line per metric (on ``stream``, default
+    the ``sys.stdout`` of the moment: a default bound at import would keep a stream that a
+    caller has since replaced, or closed)."""
+    stream = sys.stdout if stream is None else stream
     print(title, file=stream)
     width = max(len(k) for k in metrics) if metrics else 0
     for name, value in metrics.items():

@@ -1,0 +1,71 @@
+"""The numbers the README and the docs quote are the ones the code gives now.
+
+Every console block in README.md and docs/*.md that follows a ``hdsim demo`` or
+``hdsim simulate …`` command is re-run here (in a temporary folder, the scenario paths
+pointing into this checkout) and each ``name  number`` line it shows is compared with the
+same line of the fresh output, to the digits the page prints. The Python example of the
+README and the home page (its ``# … arcmin`` comment) is run too. A change to the physics
+that moves a quoted figure fails here until the page is updated: a page cannot go stale.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+BLOCK = re.compile(r"```bash\n(?:pip install [^\n]*&& )?(hdsim (?:demo|simulate)[^\n]*)\n```\s*(?:\n[^`][^\n]*)*?\n```console\n(.*?)```",
+                   re.DOTALL)
+#: a quoted figure: a label (words, or a metric name) and a number, at the start of a line
+FIGURE = re.compile(r"^\s+([A-Za-z][^\n]*?)\s{2,}(-?\d[\d.]*(?:e[+-]?\d+)?)(?=\s|$)", re.MULTILINE)
+
+
+def _quoted_blocks():
+    out = []
+    for page in PAGES:
+        for m in BLOCK.finditer(page.read_text(encoding="utf-8")):
+            if "--json" not in m.group(1):
+                out.append(pytest.param(m.group(1), m.group(2), id=f"{page.name}: {m.group(1)}"))
+    return out
+
+
+def _agrees(quoted: str, value: float) -> bool:
+    """``value`` printed to the digits of ``quoted`` gives ``quoted`` (half a unit of its last digit)."""
+    mantissa = quoted.split("e")[0]
+    decimals = len(mantissa.split(".")[1]) if "." in mantissa else 0
+    exponent = int(quoted.split("e")[1]) if "e" in quoted else 0
+    return abs(value - float(quoted)) <= 0.5 * 10.0 ** (exponent - decimals) * (1 + 1e-9)
+
+
+@pytest.mark.parametrize("command, shown", _quoted_blocks())
+def test_a_console_block_of_the_docs_is_what_the_command_prints(command, shown, cli, tmp_path):
+    args = [a.replace("scenarios/", str(ROOT / "scenarios") + "/") for a in command.split()[1:]]
+    code, out, err = cli(*args, cwd=tmp_path)
+    assert code == 0, err
+    fresh = {label.strip(): float(number) for label, number in FIGURE.findall(out)}
+    quoted = FIGURE.findall(shown)
+    assert quoted, f"no figure found in the block of {command!r}"
+    for label, number in quoted:
+        label = label.strip()
+        assert label in fresh, f"{command}: '{label}' is not printed any more"
+        assert _agrees(number, fresh[label]), f"{command}: the page says {label} {number}, it prints {fresh[label]:.6g}"
+
+
+def test_the_python_example_prints_what_its_comment_says():
+    import hdsim
+
+    drive = hdsim.load_unit("CSG-25-100").with_updates({"flexspline.h_c": 0.6e-3})
+    value = hdsim.run_scenario(drive, "lost_motion").metric("lost_motion_arcmin")
+    for page in (ROOT / "README.md", ROOT / "docs" / "index.md"):
+        comment = re.search(r'print\(run\.metric\("lost_motion_arcmin"\)\)\s+# ([\d.]+) arcmin', page.read_text())
+        assert comment, page
+        assert _agrees(comment.group(1), value), f"{page.name} says {comment.group(1)}, the example prints {value:.4g}"
+
+
+def test_every_figure_script_is_listed_on_the_home_page():
+    home = (ROOT / "docs" / "index.md").read_text(encoding="utf-8")
+    scripts = sorted(p.name for p in (ROOT / "docs").glob("make_*.py"))
+    assert scripts and all(f"python docs/{name}" in home for name in scripts), scripts
