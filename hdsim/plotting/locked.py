@@ -16,7 +16,12 @@ from hdsim.units import rad_to_arcmin
 
 
 def plot_loop(run, ax=None, window_fraction: float = 0.04, sample: int = 0):
-    """Torque against twist (the hysteresis loop), with the ±4 % T_N window shaded.
+    """Torque against twist (the hysteresis loop), loading and unloading in two colours.
+
+    The ±``window_fraction`` T_N window is drawn as two dashed lines. An inset shows the
+    twist less its straight-line fit against the torque: the loop opens there, where on
+    the full scale the two branches lie on one line (a loop a tenth of an arcmin wide on
+    a span of one).
 
     Parameters
     ----------
@@ -25,7 +30,7 @@ def plot_loop(run, ax=None, window_fraction: float = 0.04, sample: int = 0):
     ax : matplotlib.axes.Axes, optional
         Axes to draw into; None makes a new figure.
     window_fraction : float
-        Half height of the shaded torque window as a fraction of T_N [-].
+        The torque window as a fraction of T_N [-].
     sample : int
         Which sample of a batch run to draw.
 
@@ -38,9 +43,13 @@ def plot_loop(run, ax=None, window_fraction: float = 0.04, sample: int = 0):
     torque = run.result.signal("torque_Nm", sample)
     twist = rad_to_arcmin(run.result.signal("twist_rad", sample))
     rated = float(np.asarray(run.model.drive.rated_torque).reshape(-1)[sample])
-    ax.plot(twist, torque, lw=1.2, color="C0", label=f"{run.model.name}: {run.scenario.name}")
+    loading = np.gradient(torque) >= 0
+    for rows, colour, label in ((loading, "C0", "loading"), (~loading, "C3", "unloading")):
+        ax.plot(np.where(rows, twist, np.nan), torque, lw=1.2, color=colour,
+                label=f"{run.model.name}: {run.scenario.name}, {label}")
     window = window_fraction * rated
-    ax.axhspan(-window, window, color="C1", alpha=0.15, label=f"±{window_fraction:.0%} T_N")
+    for level in (-window, window):
+        ax.axhline(level, color="C1", ls="--", lw=0.8, label=f"±{window_fraction:.0%} T_N" if level > 0 else None)
     if "lost_motion_arcmin" in run.metrics:
         ax.set_title(f"lost motion {run.metric('lost_motion_arcmin', sample):.3f} arcmin "
                      f"(±{window_fraction:.0%} T_N, full span)")
@@ -53,6 +62,15 @@ def plot_loop(run, ax=None, window_fraction: float = 0.04, sample: int = 0):
     ax.set_ylabel("output torque [N·m]")
     ax.legend(loc="upper left", fontsize="small")
     ax.grid(alpha=0.3)
+    # the loop magnified: the twist less its straight line through the whole run
+    slope, offset = np.polyfit(torque, twist, 1)
+    inset = ax.inset_axes([0.62, 0.08, 0.35, 0.35])
+    for rows, colour in ((loading, "C0"), (~loading, "C3")):
+        inset.plot(torque, np.where(rows, twist - (slope * torque + offset), np.nan), lw=0.9, color=colour)
+    inset.set_xlabel("torque [N·m]", fontsize="x-small")
+    inset.set_ylabel("twist − line [arcmin]", fontsize="x-small")
+    inset.tick_params(labelsize="x-small")
+    inset.grid(alpha=0.3)
     return fig
 
 
