@@ -17,8 +17,10 @@ def test_outcome_and_checks_on_top_and_no_rate_plot_for_one_rate(tmp_path):
                   "checks": [{"check": "loading_rates", "status": "warn", "message": "1 distinct loading rate"}]}
     result.report(tmp_path, assessment)
     md = (tmp_path / "index.md").read_text().splitlines()
-    assert md[2] == "**Outcome: cannot decide; to decide, record a second loading rate**"
-    assert "| warn | loading_rates | 1 distinct loading rate |" in md[:12]
+    # first a summary box, then the outcome line, the verdict and the checks, before any table of fits
+    assert md[2:5] == ["| summary |  |", "|---|---|", "| outcome | cannot decide |"]
+    assert "**Outcome: cannot decide; to decide, record a second loading rate**" in md[:14]
+    assert "| warn | loading_rates | 1 distinct loading rate |" in md[:22]
     figures = [line for line in md if line.startswith("![")]
     assert figures[0].endswith("](residual_vs_time.png)")
     # every figure says what it shows: its alt text and caption are words, not its file name
@@ -27,3 +29,22 @@ def test_outcome_and_checks_on_top_and_no_rate_plot_for_one_rate(tmp_path):
     assert all("residual_vs_rate" not in line for line in figures)
     html = (tmp_path / "index.html").read_text()
     assert html.index("Outcome: cannot decide") < html.index("Verdict:") < html.index("Before and after")
+
+
+def test_the_page_says_how_to_reproduce_it_and_rounds_values_to_their_uncertainty(tmp_path):
+    from hdsim.identification.report_page import rounded
+
+    assert rounded(0.0512, 0.00034) == "0.05120 ± 0.00034"
+    assert rounded(-0.75, 0.042) == "-0.750 ± 0.042"
+    assert rounded(2.3e-5, 1.1e-6) == "(2.30 ± 0.11)e-5"
+    assert rounded(6.304, None) == "6.304"
+    cols, tr = truth.make_stiffness_data({"friction"}, set(), seed=7, n_rows=300)
+    truth.write_csv(tmp_path / "bench.csv", cols, tr["meta"])
+    from hdsim.io.measurement import load_measurement
+    import hashlib
+
+    result = diagnose(load_measurement(tmp_path / "bench.csv"), "friction", families=["hardening"], max_rounds=0)
+    result.report(tmp_path / "rep")
+    md = (tmp_path / "rep" / "index.md").read_text()
+    assert hashlib.sha256((tmp_path / "bench.csv").read_bytes()).hexdigest() in md
+    assert "| hdsim |" in md and "Fitted parameters" in md and " ± " in md

@@ -15,8 +15,12 @@ leaves the backend of the calling process as it was; every file is written atomi
 from __future__ import annotations
 
 import base64
+import hashlib
 import html
+import math
+import sys
 from dataclasses import dataclass, field
+from datetime import datetime, timezone
 from pathlib import Path
 
 import numpy as np
@@ -24,7 +28,7 @@ import numpy as np
 from hdsim.atomic import write_text_atomic
 from hdsim.io.figures import save_figure
 
-__all__ = ["Page", "new_figure", "save", "step_label", "diagnosis_page", "wrong_test_page"]
+__all__ = ["Page", "new_figure", "save", "step_label", "diagnosis_page", "wrong_test_page", "rounded", "provenance"]
 
 STYLE = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}"
          "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px;font-size:90%}"
@@ -132,6 +136,57 @@ class Page:
         return folder / "index.html"
 
 
+def rounded(value: float, sigma: float | None) -> str:
+    """``value ± sigma`` with the value rounded to the uncertainty's second significant digit
+    (no more digits than the data determine); the value to 4 digits when there is none."""
+    if sigma is None or not math.isfinite(sigma) or sigma <= 0:
+        return f"{value:.4g}"
+    digits = max(0, 1 - int(math.floor(math.log10(sigma))))
+    if abs(value) >= 1e5 or abs(value) < 1e-3:  # scientific: the mantissa to the uncertainty's digits
+        exponent = int(math.floor(math.log10(abs(value)))) if value else 0
+        scale = 10.0 ** exponent
+        keep = max(0, 1 - int(math.floor(math.log10(sigma / scale))))
+        return f"({value / scale:.{keep}f} ± {sigma / scale:.{keep}f})e{exponent:+d}"
+    return f"{value:.{digits}f} ± {sigma:.{digits}f}"
+
+
+def provenance(measurement) -> list[tuple[str, str]]:
+    """What reproduces a page: the hdsim version, the date, the command and the data's SHA-256."""
+    from hdsim._version import __version__
+
+    rows = [("hdsim", __version__), ("written", datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")),
+            ("command", " ".join(["hdsim", *sys.argv[1:]]) if Path(sys.argv[0]).name == "hdsim"
+             else "Python: " + " ".join(sys.argv)), ("data", str(measurement.source))]
+    source = Path(str(measurement.source))
+    if source.is_file():
+        rows.append(("data SHA-256", hashlib.sha256(source.read_bytes()).hexdigest()))
+    return rows
+
+
+def _summary_box(page: Page, d: dict, unit: str, scale: float) -> None:
+    """One sentence of outcome, the families added, the error before → after against the
+    noise floor, and the next measurement: the page in four lines."""
+    key = next((k for k in d["baseline"] if k.startswith("rmse_")), None)
+    floor = d["whiteness"].get("noise_floor_" + key.split("_", 1)[1]) if key else None
+    rows = [("outcome", d.get("outcome", "").replace("_", " ") or "—"),
+            ("added", ", ".join(d["added"]) or "nothing")]
+    if key:
+        rows.append((f"rms [{unit}]", f"{d['baseline'][key] * scale:.3g} → {d['final'][key] * scale:.3g}"
+                     + (f" (noise floor {floor * scale:.3g})" if floor else "")))
+    rows.append(("next measurement", d.get("next_measurement") or "none needed"))
+    page.table(("summary", ""), rows)
+
+
+def _parameters(page: Page, d: dict) -> None:
+    final = d.get("final") or {}
+    values = final.get("params") or final.get("fitted") or {}
+    sigma = final.get("uncertainty") or {}
+    rows = [(name, rounded(float(v), sigma.get(name))) for name, v in values.items()]
+    if rows:
+        page.heading("Fitted parameters (SI; torques of a torque test on the wave-generator shaft)")
+        page.table(("parameter", "value ± standard uncertainty"), rows)
+
+
 def _top(page: Page, summary: dict) -> Page:
     """Outcome, verdict and the data checks: what a reader needs before any table."""
     if summary.get("outcome"):
@@ -148,7 +203,8 @@ def wrong_test_page(measurement, folder, summary: dict) -> Path:
     """The page of a record that is not the test it claims: the verdict and the checks that
     say what it looks like (nothing was fitted). Returns ``index.html``."""
     Path(folder).mkdir(parents=True, exist_ok=True)
-    return _top(Page(f"Diagnosis of {measurement.source}"), summary).write(folder)
+    page = _top(Page(f"Diagnosis of {measurement.source}"), summary)
+    return page.heading("Reproduce").table(("", ""), provenance(measurement)).write(folder)
 
 
 def _number(value, scale: float) -> str:
@@ -291,7 +347,9 @@ def diagnosis_page(diagnosis, folder, summary: dict, scale_numbers) -> Path:
     kind = diagnosis.kind
     unit, scale = kind.report_unit
     d = {**diagnosis.to_json(), **summary}
-    page = _top(Page(f"Diagnosis of {diagnosis.measurement.source}"), d)
+    page = Page(f"Diagnosis of {diagnosis.measurement.source}")
+    _summary_box(page, d, unit, scale)
+    page = _top(page, d)
     page.text(f"{kind.name.replace('_', ' ')} test, {len(diagnosis.measurement)} rows; hold-out folds by "
               f"{d['holdout']}.")
     page.heading("Before and after").table(*_before_after(kind, d, unit, scale))
@@ -311,6 +369,7 @@ def diagnosis_page(diagnosis, folder, summary: dict, scale_numbers) -> Path:
         page.text("Final model:").bullets(d["findings"]["final"])
     w = d["whiteness"]
     page.text(f"Ljung–Box Q = {w['ljung_box_q']:.1f}, p = {w['p_value']:.3g}." if "ljung_box_q" in w else "")
+    _parameters(page, d)
     for heading, head_rows in kind.report_sections(diagnosis, d):
         page.heading(heading).table(*head_rows)
     figures = _common_figures(diagnosis, folder, unit, scale)
@@ -318,4 +377,5 @@ def diagnosis_page(diagnosis, folder, summary: dict, scale_numbers) -> Path:
     page.heading("Figures")
     for path, caption in figures:
         page.figure(path, caption)
+    page.heading("Reproduce").table(("", ""), provenance(diagnosis.measurement))
     return page.write(folder)
