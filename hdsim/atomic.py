@@ -63,8 +63,9 @@ def write_text_atomic(target: str | os.PathLike, text: str) -> None:
 def check_writable_folder(folder: str | os.PathLike) -> Path:
     """Make sure results can be written into ``folder`` before any work is done.
 
-    The folder (and its parents) is created if missing, and a temporary file is created
-    and removed in it.
+    Nothing is left behind: a temporary file is created and removed in the folder, or, when
+    it does not exist yet, in its nearest existing parent (which must be a folder the
+    results can be created in); the folder itself is made only when results are written.
 
     Raises
     ------
@@ -75,9 +76,13 @@ def check_writable_folder(folder: str | os.PathLike) -> Path:
     from hdsim.errors import InputError
 
     folder = Path(folder)
+    probe = folder
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
     try:
-        folder.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=".hdsim-write-check.", dir=folder)
+        if not probe.is_dir():
+            raise NotADirectoryError(20, "not a folder", str(probe))
+        fd, tmp = tempfile.mkstemp(prefix=".hdsim-write-check.", dir=probe)
         os.close(fd)
         os.unlink(tmp)
     except OSError as exc:

@@ -7,6 +7,9 @@ ends a study at once, as bad input, instead of filling it with failed rows.
 
 from __future__ import annotations
 
+import errno
+import os
+
 import numpy as np
 import pytest
 
@@ -68,3 +71,28 @@ def test_a_model_bug_ends_the_study_at_the_first_chunk():
     with pytest.raises(ModelError, match="TypeError"):
         evaluate(_BuggyModel(), X, workers=1, chunksize=16)
     assert _BuggyModel.calls < 64  # one chunk and its row-by-row isolation, not 256 rows
+
+
+def test_an_output_folder_that_cannot_be_written_is_said_before_the_work(tmp_path, cli):
+    # a path through a file: no folder can be made there (root, as CI runs, passes permission
+    # checks, so a file stands for the read-only folder)
+    (tmp_path / "a_file").write_text("x")
+    for args in (["simulate", "lost_motion", "--out", str(tmp_path / "a_file" / "out")],
+                 ["demo", "--out", str(tmp_path / "a_file" / "demo")]):
+        code, out, err = cli(*args)
+        assert code == 2 and len(err.strip().splitlines()) == 1 and "cannot write into" in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file"]
+
+
+@pytest.mark.parametrize("number, code", [(errno.ENOSPC, 2), (errno.EACCES, 2), (errno.EROFS, 2), (errno.ENOENT, 1)])
+def test_a_full_or_read_only_disk_met_while_writing_is_bad_input_other_os_errors_are_bugs(
+        number, code, tmp_path, cli, monkeypatch):
+    from hdsim.cli import _common
+
+    def full(*_args, **_kwargs):
+        raise OSError(number, os.strerror(number), str(tmp_path / "out" / "lost_motion.h5"))
+
+    monkeypatch.setattr(_common, "write_outputs", full)
+    got, _, err = cli("simulate", "lost_motion", "--out", str(tmp_path / "out"))
+    assert got == code and len(err.strip().splitlines()) == 1
+    assert ("internal error" in err) == (code == 1)

@@ -9,9 +9,11 @@ dispatches and turns `hdsim.errors.InputError` and
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
 import json
 import os
+import re
 import sys
 
 from hdsim.errors import InputError, SolverError
@@ -80,16 +82,43 @@ def main(argv=None) -> int:
             raise
         print(f"hdsim {args.verb}: error: {_one_line(exc)}", file=sys.stderr)
         return 2
+    except OSError as exc:
+        # a folder without permission, a read-only or full disk: the machine the user must
+        # fix, said in one line (exit 2); any other OSError is the program's failure (below)
+        if debug or not _environment(exc):
+            if debug:
+                raise
+            return _internal_error(args.verb, exc)
+        where = f" {exc.filename}" if exc.filename else ""
+        print(f"hdsim {args.verb}: error: cannot write{where}: {exc.strerror or _one_line(exc)}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print(f"hdsim {args.verb}: interrupted", file=sys.stderr)
         return 1
     except Exception as exc:  # noqa: BLE001 - the program failed, not the input: say so, exit 1
         if debug:
             raise
-        print(f"hdsim {args.verb}: internal error: {type(exc).__name__}: {_one_line(exc)} "
-              "(this is a bug in hdsim, not in your input; run again with --debug or HDSIM_DEBUG=1 "
-              "for the traceback)", file=sys.stderr)
-        return 1
+        return _internal_error(args.verb, exc)
+
+
+def _internal_error(verb: str, exc: BaseException) -> int:
+    print(f"hdsim {verb}: internal error: {type(exc).__name__}: {_one_line(exc)} "
+          "(this is a bug in hdsim, not in your input; run again with --debug or HDSIM_DEBUG=1 "
+          "for the traceback)", file=sys.stderr)
+    return 1
+
+
+#: errno of a machine that cannot take the output: no permission, read-only, full disk, quota
+_ENVIRONMENT = {errno.EACCES, errno.EPERM, errno.EROFS, errno.ENOSPC, errno.EDQUOT}
+
+
+def _environment(exc: OSError) -> bool:
+    """True for an OSError of the machine (permission, read-only, full disk), h5py's included
+    (it reports the errno in its message)."""
+    if exc.errno in _ENVIRONMENT:
+        return True
+    found = re.search(r"errno = (\d+)", str(exc))
+    return bool(found) and int(found.group(1)) in _ENVIRONMENT
 
 
 def _one_line(exc: BaseException) -> str:

@@ -6,6 +6,7 @@ import sys
 import time
 from pathlib import Path
 
+from hdsim.atomic import check_writable_folder
 from hdsim.cli import _common, emit_json
 from hdsim.model.catalog import load_unit
 from hdsim.model.datasheet import catalog_entry, default_unit
@@ -32,7 +33,7 @@ def main(args) -> int:
     model = load_unit(args.unit)
     catalog = dict(model.provenance.get("catalog") or catalog_entry(model.name))
     scenarios = [load_scenario(name) for name in ("lost_motion", "stiffness")]
-    out = Path(args.out)
+    out = check_writable_folder(args.out)  # before the runs, not after them
     summary, files = {}, {}
     for scenario in scenarios:
         print(f"running {scenario.name} on {model.name} ...", file=sys.stderr)

@@ -87,6 +87,7 @@ def _emitted(args, summary: dict, checks: list, data: dict) -> bool:
 
 
 def run(args) -> int:
+    from hdsim.atomic import check_writable_folder
     from hdsim.errors import InputError
     from hdsim.identification.test_kinds import test_kind
     from hdsim.identification.workflow import examine_record, fit
@@ -97,6 +98,7 @@ def run(args) -> int:
         raise InputError(f"{meas.source}: this is not a {meas.test} test: {wrong}")
     kind = test_kind(meas.test)
     out = Path(args.out) if args.out else Path(Path(args.data).name).with_suffix(".fit.toml")
+    check_writable_folder(out.parent)  # before the fit, not after it
     result = fit(meas, effects, unit=args.unit)
     result.save(out)
     summary = kind.fit_summary(result, out.with_suffix(""), scale)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from hdsim.atomic import check_writable_folder
 from hdsim.cli import _common, emit_json
 from hdsim.model.catalog import load_unit
 from hdsim.scenarios.run import run_scenario
@@ -33,6 +34,7 @@ def main(args) -> int:
     # everything that can be wrong with the input is checked before anything is written
     scenario = load_scenario(args.scenario)
     model, scenario = _common.apply_sets(load_unit(args.unit), scenario, _common.parse_sets(args.sets))
+    check_writable_folder(args.out)  # an unwritable folder is said before the run, not after it
     run = run_scenario(model, scenario)
     paths = _common.write_outputs(run, Path(args.out), figures=not args.no_figures)
     metrics = _common.metrics_as_floats(run.metrics)

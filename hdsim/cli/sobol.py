@@ -17,6 +17,7 @@ import json
 import time
 from pathlib import Path
 
+from hdsim.atomic import check_writable_folder
 from hdsim.errors import InputError
 
 HELP = "Sobol' sensitivity study (first, total, optional second order) with checks"
@@ -73,6 +74,8 @@ def run(args) -> int:
     target = _float(args.target_width, "--target-width") if args.target_width else None
     if args.resume and not args.out:
         raise InputError("--resume needs --out STUDY.h5")
+    if args.out:
+        check_writable_folder(Path(args.out).parent)  # before the study, not after its first chunk
     # a broken model is ModelError (bad input, exit 2); anything else that fails here, a
     # broken process pool included, is the program's failure and reaches main (exit 1)
     func, problem, output, model, analytic = _resolve(args, models)
