@@ -6,11 +6,14 @@ Session fixtures (each built on first use, then reused by every test that asks):
   ~5 s); used by the physics checks, the figure checks and the result-file checks.
 - ``default_lost_motion_run``, ``default_stiffness_run``: the shipped ±4 % T_N lost-motion
   and ±T_N stiffness scenarios on the default unit with its default effects.
+- ``short_ke_run``: the contract scenario on CSG-25-100 shortened to 0.02 output
+  revolutions each way (``SHORT_KE``); used by the brake check and the driven ``simulate``
+  verb's output check.
 - ``truth_stiffness``, ``truth_ke``: one independent truth measurement each
   (``tests/truth.py``, which shares no code with hdsim) as ``(columns, truth)``.
 
 Tests must not modify what these fixtures return (runs hold numpy arrays: copy before
-changing one). Under pytest-xdist the three runs are made once for all workers: the first
+changing one). Under pytest-xdist the four runs are made once for all workers: the first
 worker to ask makes the run, the others read its pickle (``_once_per_session``).
 
 ``cli`` runs the console verbs in-process (``hdsim.cli.main``) and returns
@@ -67,17 +70,28 @@ def _once_per_session(tmp_path_factory, name, make):
         return value
 
 
-def _builtin_run(unit_name, scenario_name):
+def _builtin_run(unit_name, scenario_name, updates=None):
     from hdsim.model.catalog import load_unit
     from hdsim.scenarios.run import run_scenario
     from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario
 
-    return run_scenario(load_unit(unit_name), load_scenario(builtin_scenario_path(scenario_name)))
+    scenario = load_scenario(builtin_scenario_path(scenario_name))
+    return run_scenario(load_unit(unit_name), scenario.with_updates(updates) if updates else scenario)
+
+
+#: the contract scenario shortened (the same profile, less travel): ``short_ke_run``
+SHORT_KE = {"input.output_revolutions": 0.02, "input.settle_revolutions": 0.01}
 
 
 @pytest.fixture(scope="session")
 def ke_run(tmp_path_factory):
     return _once_per_session(tmp_path_factory, "ke_run", lambda: _builtin_run("CSG-25-100", "kinematic_error"))
+
+
+@pytest.fixture(scope="session")
+def short_ke_run(tmp_path_factory):
+    return _once_per_session(tmp_path_factory, "short_ke_run",
+                             lambda: _builtin_run("CSG-25-100", "kinematic_error", SHORT_KE))
 
 
 @pytest.fixture(scope="session")

@@ -62,12 +62,14 @@ def test_names_resolve_and_unknown_names_are_refused():
 def test_sobol_cli_on_the_simulator(tmp_path, cli):
     """A built-in unit's study through the simulator: contract JSON, checks, the model it ran
     (this test also holds the checks of test_sensitivity_cli's former unit study)."""
+    # N = 16 (80 runs, not 160): the rim's lead is as clear as at N = 32 (ST 0.79 against 0.22
+    # for h_c, against 0.83 and 0.18)
     code, stdout, err = cli("sobol", "--unit", "CSG-25-100", "--params", "h_pz,h_c,R_v", "--range", "10%",
-                            "--output", "lost_motion_arcmin", "--n", "32", "--workers", "1",
+                            "--output", "lost_motion_arcmin", "--n", "16", "--workers", "1",
                             "--out", tmp_path / "s.h5", "--json")
     assert code == 0, err
     data = json.loads(stdout)
-    assert data["evaluations"] == 32 * (3 + 2)
+    assert data["evaluations"] == 16 * (3 + 2)
     assert {"S1", "S1_conf", "ST", "ST_conf", "seconds", "study", "params", "n", "output"} <= set(data)
     assert data["output"] == "lost_motion_arcmin" and data["params"] == ["h_pz", "h_c", "R_v"]
     assert data["checks"]["items"]

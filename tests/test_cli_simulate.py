@@ -20,8 +20,10 @@ LOST_MOTION = str(ROOT / "scenarios/lost_motion.toml")
 
 def test_simulate_lost_motion_json_and_result(tmp_path, cli, png_image):
     out = tmp_path / "out"
+    # one load cycle instead of two (the second retraces the first): 0.6 of the time, the
+    # lost motion within 1e-5 of the closed form either way
     code, stdout, err = cli("simulate", LOST_MOTION, "--unit", "CSG-25-100", "--set", "friction=none",
-                            "--out", out, "--json")
+                            "--set", "scenario.load.cycles=1", "--out", out, "--json")
     assert code == 0, err
     payload = json.loads(stdout)
     assert payload["scenario"] == "lost_motion" and payload["unit"] == "CSG-25-100"

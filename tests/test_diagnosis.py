@@ -188,7 +188,9 @@ def test_nothing_hidden_adds_nothing():
 
 
 def test_effect_outside_the_library_is_not_reported_as_success():
-    meas, _ = stiffness(("rate_dependent_unknown",), (), 4, n_rows=1000)
+    # 600 rows: the residual is as far from white as on 1000 (Ljung-Box p = 0, rms 6.7x the
+    # noise floor, against 8.9x; seeds 4-10 all decide the same)
+    meas, _ = stiffness(("rate_dependent_unknown",), (), 4, n_rows=600)
     d = diagnose(meas)
     j = d.to_json()
     assert not j["success"] and not j["whiteness"]["explained"]

@@ -211,11 +211,30 @@ def test_driven_figures(ke_run):
 
 
 # --------------------------------------------------------------------------- command line
-def test_cli_simulate_driven_json(tmp_path, cli, png_image):
+def test_cli_simulate_driven_json(tmp_path, cli, monkeypatch, png_image, short_ke_run):
+    """``hdsim simulate`` on a driven scenario: its JSON, run file and figures. The run it
+    asks for (the contract scenario shortened by --set) is the session's ``short_ke_run``
+    (conftest.py; the brake check of test_driven_physics.py uses it too): the verb gets that
+    run, after checking it asked for exactly that drive and scenario, instead of making it
+    a second time."""
+    from hdsim.cli import simulate
+
+    asked = []
+
+    def shared_run(model, scenario):
+        unit = load_unit("CSG-25-100")
+        assert model.name == unit.name and model.params() == unit.params()
+        assert {k: e.id for k, e in model.effects().items()} == {k: e.id for k, e in unit.effects().items()}
+        assert scenario.data == short_ke_run.scenario.data  # --set reached the scenario
+        asked.append(scenario.name)
+        return short_ke_run
+
+    monkeypatch.setattr(simulate, "run_scenario", shared_run)
     code, stdout, err = cli("simulate", ROOT / "scenarios/kinematic_error.toml", "--unit", "CSG-25-100",
                             "--set", "scenario.input.output_revolutions=0.02",
                             "--set", "scenario.input.settle_revolutions=0.01", "--out", tmp_path, "--json")
     assert code == 0, err
+    assert asked == ["kinematic_error"]
     payload = json.loads(stdout)
     assert payload["scenario"] == "kinematic_error" and payload["unit"] == "CSG-25-100"
     assert set(payload["metrics"]) >= {"transmission_accuracy_arcsec", "lost_motion_on_reversal_arcsec",

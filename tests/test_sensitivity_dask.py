@@ -8,7 +8,12 @@ import pytest
 from hdsim.cli import main
 from hdsim.sensitivity import GFunction, run_study
 
-distributed = pytest.importorskip("distributed")
+
+def _distributed():
+    """The ``distributed`` package, imported by the tests that use it rather than at
+    collection (0.4-0.6 s that every pytest-xdist worker paid); skipped where it is missing."""
+    return pytest.importorskip("distributed")
+
 
 KEYS = ("S1", "ST", "S1_conf", "ST_conf", "S1_conf_replicates", "ST_conf_replicates")
 
@@ -16,12 +21,14 @@ KEYS = ("S1", "ST", "S1_conf", "ST_conf", "S1_conf_replicates", "ST_conf_replica
 @pytest.fixture(scope="module")
 def cluster():
     # Two single-thread workers in this process; tcp so the CLI can connect by address.
+    distributed = _distributed()
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
                                   protocol="tcp", dashboard_address=None) as c:
         yield c
 
 
 def test_dask_executor_matches_local(cluster):
+    distributed = _distributed()
     g = GFunction()
     local = run_study(g, g.problem(), 256, seed=3, workers=1, progress=False).analysis
     with distributed.Client(cluster) as client:
@@ -62,6 +69,7 @@ def test_study_survives_a_lost_dask_worker():
     local study. The same with a worker process killed by SIGKILL is the slow test below."""
     # tcp, as on a real cluster: once in CI, closing a worker on the in-process transport left
     # the client without its scheduler connection
+    distributed = _distributed()
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False, protocol="tcp",
                                   dashboard_address=None) as cluster, distributed.Client(cluster) as client:
         _study_losing_a_worker(client, lambda: cluster.sync(cluster.workers[0].close))
@@ -109,6 +117,7 @@ def test_study_survives_a_killed_dask_worker():
     import cloudpickle
 
     cloudpickle.register_pickle_by_value(sys.modules[__name__])  # workers cannot import tests/
+    distributed = _distributed()
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster, distributed.Client(cluster) as client:
         pids = list(client.run(os.getpid).values())
