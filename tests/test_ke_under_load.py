@@ -39,7 +39,7 @@ def test_the_twist_slope_of_a_hand_built_run_is_the_compliance():
 
 @pytest.mark.parametrize("profile, sign", [("sine", -1.0), ("ramp", 1.0), ("opposing", -1.0)])
 def test_the_stiffness_under_load_is_identified_in_either_sign_convention(profile, sign):
-    cols, tr = truth.make_ke_data(hidden=("kinematic_error",), seed=0, load_profile=profile, n_rows=4000)
+    cols, tr = truth.make_ke_data(hidden=("kinematic_error",), seed=0, load_profile=profile, n_rows=2500)
     result = diagnose(_ke(cols, sign))
     assert result.added == ["kinematic_error"] and result.outcome == "found"
     stiffness = result.final.fit.summary()["derived"]["K0_Nm_per_rad"]
@@ -51,7 +51,7 @@ def test_the_stiffness_under_load_is_identified_in_either_sign_convention(profil
 
 
 def test_a_constant_load_in_one_direction_does_not_determine_the_stiffness():
-    cols, _ = truth.make_ke_data(hidden=("kinematic_error",), seed=1, load_profile="sine", n_rows=4000)
+    cols, _ = truth.make_ke_data(hidden=("kinematic_error",), seed=1, load_profile="sine", n_rows=2500)
     half = cols["time_s"].size // 2  # the forward pass only
     steady = {k: v[:half] for k, v in cols.items()}
     steady["torque_Nm"] = np.full(half, 20.0) + np.random.default_rng(0).normal(0.0, 0.05, half)
