@@ -48,3 +48,11 @@ def test_the_page_says_how_to_reproduce_it_and_rounds_values_to_their_uncertaint
     md = (tmp_path / "rep" / "index.md").read_text()
     assert hashlib.sha256((tmp_path / "bench.csv").read_bytes()).hexdigest() in md
     assert "| hdsim |" in md and "Fitted parameters" in md and " ± " in md
+
+
+def test_a_decision_says_how_an_error_changed_in_words():
+    from hdsim.identification.selection import _change
+
+    assert _change("rms error", 0.0, 0.05) == "rms error does not change (5 % fall needed)"
+    assert _change("rms error", -2.498, 0.05) == "rms error rises by 250 % (5 % fall needed)"
+    assert _change("hold-out error", 0.032, 0.05) == "hold-out error falls by only 3.2 % (5 % fall needed)"

@@ -268,8 +268,10 @@ class RunningSession:
         elif score >= thresholds.score and min(gains) < thresholds.strong_holdout_gain:
             cand.reason = f"the BIC changes by {score:+.3g}; it must fall by more than {-thresholds.score:g}"
         elif min(gains) < bar:
-            cand.reason = (f"it predicts the held-out halves better by {100 * min(gains):.1f} %, less than "
-                           f"{100 * bar:.0f} %" + (" (the rms is at the noise floor already)" if at_floor else ""))
+            worst = min(gains)
+            told = f"better by only {100 * worst:.1f} %" if worst > 0 else f"worse by {100 * -worst:.3g} %"
+            cand.reason = (f"it predicts the held-out halves {told}; {100 * bar:.0f} % better is needed"
+                           + (" (the rms is at the noise floor already)" if at_floor else ""))
         elif share < thresholds.min_share:
             cand.reason = (f"it removes {100 * share:.0f} % of the residual above the noise floor, less than "
                            f"{100 * thresholds.min_share:.0f} %: a patch for another family's form, not a missing "

@@ -69,13 +69,26 @@ def score_candidate(family: str, effect_id: str, res: list, base,
     if not evidence:
         reasons.append(f"score {score:.1f} not below {thresholds.score:g}")
     if not holds_out:
-        reasons.append(f"hold-out error falls by only {100 * pooled:.1f} %"
-                       + (f" ({100 * needed:.0f} % needed at the noise floor)" if needed > thresholds.holdout_gain else ""))
+        reasons.append(_change("hold-out error", pooled, needed)
+                       + (" at the noise floor" if needed > thresholds.holdout_gain else ""))
     if not lowers:
-        reasons.append(f"rms error falls by only {100 * gain:.1f} %")
+        reasons.append(_change("rms error", gain, thresholds.min_gain))
     ok = not reasons
     figures = {"rmse_rad": fit_all.rmse_rad, "max_abs_error_rad": fit_all.max_abs_rad, "holdout_rmse_rad": hold,
                "pooled_holdout_gain": float(pooled), "rmse_gain": float(gain)}
     return Candidate(family=family, effect=effect_id, fit=fit_all, fold_fits=fold_fits, score=float(score),
                      n_eff=float(n_eff), holdout_gain=gains, accepted=ok, reason="passes" if ok else "; ".join(reasons),
                      figures=figures)
+
+
+def _change(what: str, gain: float, needed: float) -> str:
+    """How an error changed against the fall needed, in words: "falls by only 3.2 %", "does
+    not change", "rises by 250 %" (never "falls by only -0.0 %")."""
+    if abs(gain) < 5e-4:
+        told = "does not change"
+    elif gain > 0:
+        told = f"falls by only {100 * gain:.1f} %"
+    else:
+        told = f"rises by {100 * -gain:.3g} %"
+    return f"{what} {told} ({100 * needed:.0f} % fall needed)"
+
