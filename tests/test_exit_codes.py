@@ -92,6 +92,9 @@ def test_a_full_or_read_only_disk_met_while_writing_is_bad_input_other_os_errors
     def full(*_args, **_kwargs):
         raise OSError(number, os.strerror(number), str(tmp_path / "out" / "lost_motion.h5"))
 
+    from hdsim.cli import simulate
+
+    monkeypatch.setattr(simulate, "run_scenario", lambda model, scenario: None)  # the write fails, not the run
     monkeypatch.setattr(_common, "write_outputs", full)
     got, _, err = cli("simulate", "lost_motion", "--out", str(tmp_path / "out"))
     assert got == code and len(err.strip().splitlines()) == 1
