@@ -85,9 +85,10 @@ def _print(s) -> None:
     from hdsim.identification.test_kinds import test_kind
 
     kind = test_kind(s["test"])
-    key, unit = kind.error_key, kind.error_unit
+    key = kind.error_key
+    unit, scale = kind.report_unit  # the report's unit: the console and the page say the same numbers
     print(f"{s['test']} test: baseline {', '.join(s['baseline']['effects']) or '(base model)'}, "
-          f"rms {s['baseline'][key]:.3g} {unit}")
+          f"rms {s['baseline'][key] * scale:.3g} {unit}")
     settled = s.get("ranking_round", 1)
     print("ranking (first round, lower score is better):" if settled == 1 else
           f"ranking (round {settled}, the first after the change of form below; lower score is better):")
@@ -95,7 +96,7 @@ def _print(s) -> None:
         if c["score"] is None:
             print(f"  {c['family']:<16} {c['effect']:<16} {c['why']}")
             continue
-        print(f"  {c['family']:<16} {c['effect']:<16} score {c['score']:10.1f}  rms {c[key]:.3g} {unit}"
+        print(f"  {c['family']:<16} {c['effect']:<16} score {c['score']:10.1f}  rms {c[key] * scale:.3g} {unit}"
               f"  {c['why']}")
     print(f"added: {', '.join(s['added']) or 'nothing'}")
     for r in s.get("reshaped", []):
@@ -111,7 +112,7 @@ def _print(s) -> None:
         rival = a["families"][1] + "".join(f" as {e}" for e in a.get("other_form", {}).values())
         held = f" ({a['provisional']} stands in the model for the loss, not added)" if a.get("provisional") else ""
         print(f"ambiguous: {a['families'][0]} vs {rival}{held}; to separate them: {a['measurement']}")
-    print(f"final: {', '.join(s['final']['effects']) or '(base model)'}, rms {s['final'][key]:.3g} {unit}")
+    print(f"final: {', '.join(s['final']['effects']) or '(base model)'}, rms {s['final'][key] * scale:.3g} {unit}")
     print(s["verdict"])
     print(f"outcome: {s['outcome']}" + (f"; to decide, record {s['next_measurement']}" if s["next_measurement"]
                                          else ""))

@@ -320,9 +320,13 @@ def running_checks(meas, drive) -> tuple[list, dict]:
     if meas.temperature is not None:
         span = float(np.ptp(meas.temperature))
         data["temperature_span_K"] = span
-        checks.append(Check("temperature", "warn" if span > TEMPERATURE_SPAN else "ok",
-                             f"the temperature spans {span:.3g} K" + (": grease friction changes with it; "
-                             "the fit assumes one temperature" if span > TEMPERATURE_SPAN else "")))
+        if span == 0:  # a column that never changes was not read, or is a placeholder
+            checks.append(Check("temperature", "warn", f"the temperature column holds one value "
+                                 f"({float(meas.temperature[0]):.3g} °C) on every row: a sensor not read?"))
+        else:
+            checks.append(Check("temperature", "warn" if span > TEMPERATURE_SPAN else "ok",
+                                 f"the temperature spans {span:.3g} K" + (": grease friction changes with it; "
+                                 "the fit assumes one temperature" if span > TEMPERATURE_SPAN else "")))
     level = float(np.mean(whole)) if whole else float(np.median(np.abs(levels)))
     checks.append(Check("torque_noise", "warn" if noise > NOISE_SHARE * level else "ok",
                          f"torque noise {noise:.3g} N·m against a running level of {level:.3g} N·m"))
