@@ -213,7 +213,8 @@ def run_diagnosis(kind, session, pool: list, *, max_rounds: int | None = None, l
     current = dict(session.chosen)
     steps, added, ambiguous, reshaped = [step], [], [], []
     undecidable: set = set()  # a rate pair once one loading rate could not separate it
-    say(f"baseline {step.effects}: rms {kind.fit_errors(step.fit)[kind.error_key]:.3g} {kind.error_unit}")
+    unit, scale = kind.report_unit
+    say(f"baseline {step.effects}: rms {kind.fit_errors(step.fit)[kind.error_key] * scale:.3g} {unit}")
     while True:
         todo = [f for f in pool if f not in current and f not in undecidable]
         if not todo or (max_rounds is not None and len(added) >= max_rounds):
