@@ -60,8 +60,21 @@ def twist_figures(diagnosis, folder) -> list[tuple[Path, str]]:
     ax.set_xlabel("torque [N·m]")
     ax.set_ylabel("angle − offset [arcsec]")
     ax.set_title("measured vs model")
-    ax.legend(fontsize=8)
-    drawn.append((save(fig, folder / FIGURES[1]), "Measured angle against torque, with the first and the last model."))
+    ax.legend(fontsize=8, loc="upper left")
+    # zoomed where the first model misses most: a misfit of arcseconds on a span of hundreds
+    worst = int(np.argmax(np.abs(first.fit.residual)))
+    near = np.abs(T - T[worst]) <= 0.08 * max(float(np.ptp(T)), 1e-12)
+    inset = ax.inset_axes([0.6, 0.07, 0.37, 0.37])
+    inset.plot(T[near], (y[near] - first.fit.offset) * arcsec, ".", ms=2, color="0.6")
+    for step, style in zip(ends, ("--", "-")[-len(ends):]):
+        model = step.fit.prediction - (np.asarray(meas.wg_angle) / meas.ratio if meas.wg_driven else 0)
+        # NaN outside the window: the legs that pass through it are drawn apart, not joined
+        inset.plot(T, np.where(near, (model - first.fit.offset) * arcsec, np.nan), style, lw=1)
+    inset.set_xlim(float(np.min(T[near])), float(np.max(T[near])))
+    inset.set_title("where the first model misses most", fontsize=7)
+    inset.tick_params(labelsize=7)
+    drawn.append((save(fig, folder / FIGURES[1]), "Measured angle against torque with the first and the last "
+                  "model; the inset zooms on the torque where the first model misses most."))
 
     # residual vs torque by direction
     fig = new_figure((10, 4))
