@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import sys
 import time
-from pathlib import Path
 
 from hdsim.atomic import check_writable_folder
 from hdsim.cli import _common, emit_json
