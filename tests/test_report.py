@@ -56,3 +56,19 @@ def test_a_decision_says_how_an_error_changed_in_words():
     assert _change("rms error", 0.0, 0.05) == "rms error does not change (5 % fall needed)"
     assert _change("rms error", -2.498, 0.05) == "rms error rises by 250 % (5 % fall needed)"
     assert _change("hold-out error", 0.032, 0.05) == "hold-out error falls by only 3.2 % (5 % fall needed)"
+
+
+def test_fit_report_writes_one_self_contained_page(tmp_path, cli):
+    cols, tr = truth.make_stiffness_data({"friction"}, set(), seed=7, n_rows=300)
+    truth.write_csv(tmp_path / "bench.csv", cols, tr["meta"])
+    code, out, err = cli("fit", "bench.csv", "--effects", "friction", "--report", "page", "--json", cwd=tmp_path)
+    assert code == 0, err
+    import json
+
+    assert json.loads(out)["report"] == "page/index.html"
+    html = (tmp_path / "page" / "index.html").read_text()
+    md = (tmp_path / "page" / "index.md").read_text()
+    # every figure of the Markdown page is embedded in the HTML one, which fetches nothing
+    assert html.count('src="data:image/png;base64,') == md.count("![") >= 2
+    assert html.count("src=") == md.count("![")
+    assert "Fitted parameters" in md and "SHA-256" in md and "| effects | friction |" in md

@@ -34,6 +34,8 @@ def register(subparsers) -> None:
     add_import_arguments(p)
     p.add_argument("--out", default=None, metavar="FILE",
                    help="where to write the fitted parameter set (default: DATA stem + .fit.toml)")
+    p.add_argument("--report", default=None, metavar="DIR",
+                   help="write a self-contained page of the fit (index.html, index.md, figures) into DIR")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.set_defaults(func=run)
 
@@ -99,11 +101,18 @@ def run(args) -> int:
     kind = test_kind(meas.test)
     out = Path(args.out) if args.out else Path(Path(args.data).name).with_suffix(".fit.toml")
     check_writable_folder(out.parent)  # before the fit, not after it
+    if args.report:
+        check_writable_folder(args.report)
     result = fit(meas, effects, unit=args.unit)
     result.save(out)
     summary = kind.fit_summary(result, out.with_suffix(""), scale)
     summary["parameters_file"] = str(out)
-    if _emitted(args, summary, checks + kind.plausibility(result, scale), data):
+    checks = checks + kind.plausibility(result, scale)
+    if args.report:
+        from hdsim.identification.report_page import fit_page
+
+        summary["report"] = str(fit_page(result, args.report, {**summary, "checks": checks}, kind, scale))
+    if _emitted(args, summary, checks, data):
         return 0
     _PRINTERS[kind.error_key](meas, result, summary)
     sys.stdout.flush()

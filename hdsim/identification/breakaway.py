@@ -342,6 +342,9 @@ class BreakawayTest(RunningTorqueTest):
                 "against time in the report (a controller that changes the torque, a load on the shaft)")
 
     def report_figures(self, diagnosis, folder, scale):
+        return []  # the residual against time, drawn for every kind, shows each start
+
+    def fit_figures(self, result, folder, scale):
         return []
 
     def report_sections(self, diagnosis, diagnosis_json):

@@ -215,6 +215,11 @@ class TwistTest(TestKind):
 
         return twist_figures(diagnosis, folder)
 
+    def fit_figures(self, result, folder, scale):
+        from hdsim.identification.report import twist_fit_figure
+
+        return [twist_fit_figure(result, folder)]
+
 
 class StiffnessTest(TwistTest):
     """The torsional stiffness / hysteresis test: wave generator locked, circular spline fixed."""

@@ -24,7 +24,7 @@ from hdsim.identification.report_page import new_figure, save, step_label
 from hdsim.identification.residuals import order_spectrum, views
 from hdsim.units import ARCSEC_PER_RAD
 
-__all__ = ["twist_figures", "FIGURES"]
+__all__ = ["twist_figures", "twist_fit_figure", "FIGURES"]
 
 FIGURES = ("residual_vs_time.png", "measured_vs_model.png", "residual_vs_torque.png",
            "residual_spectrum.png", "residual_vs_rate.png", "error_fall.png")
@@ -156,3 +156,27 @@ def _loop_by_rate(v):
         out_r.append(float(np.median(rate[m])))
         out_w.append(float(np.mean(r[down]) - np.mean(r[up])))
     return out_r, out_w
+
+
+def twist_fit_figure(result, folder) -> tuple[Path, str]:
+    """Measured angle against torque with the fitted model, and the residual against torque
+    below it (loading and unloading apart): the figure of a twist fit's page."""
+    meas = result.measurement
+    T = np.asarray(meas.torque, dtype=float)
+    measured = _x(meas) - result.offset
+    model = result.prediction - (np.asarray(meas.wg_angle) / meas.ratio if meas.wg_driven else 0) - result.offset
+    fig = new_figure((7, 6))
+    top, bottom = fig.subplots(2, 1, sharex=True)
+    top.plot(T, measured * ARCSEC_PER_RAD, ".", ms=2, color="0.6", label="measured")
+    top.plot(T, model * ARCSEC_PER_RAD, "-", lw=1, label="model: " + ("+".join(result.families) or "base"))
+    top.set(ylabel="angle − offset [arcsec]", title="measured vs fitted model")
+    top.legend(fontsize=8)
+    v = views(meas, result.residual)
+    r = v["residual"] * ARCSEC_PER_RAD
+    bottom.plot(T[v["direction"] > 0], r[v["direction"] > 0], ".", ms=2, color="tab:blue", label="loading")
+    bottom.plot(T[v["direction"] <= 0], r[v["direction"] <= 0], ".", ms=2, color="tab:red", label="unloading")
+    bottom.set(xlabel="torque [N·m]", ylabel="residual [arcsec]")
+    bottom.legend(fontsize=8, markerscale=4)
+    return (save(fig, Path(folder) / "measured_vs_model.png"),
+            "Measured angle against torque with the fitted model; below, the residual, loading and unloading apart.")
+

@@ -28,7 +28,7 @@ import numpy as np
 from hdsim.atomic import write_text_atomic
 from hdsim.io.figures import save_figure
 
-__all__ = ["Page", "new_figure", "save", "step_label", "diagnosis_page", "wrong_test_page", "rounded", "provenance"]
+__all__ = ["Page", "new_figure", "save", "step_label", "diagnosis_page", "wrong_test_page", "rounded", "provenance", "fit_page"]
 
 STYLE = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}"
          "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px;font-size:90%}"
@@ -290,20 +290,25 @@ def _confidence(page: Page, conf: dict) -> None:
         page.text(f"Round {r['round']}:").table(("model", "Δelpd [nats]", "SE", "P(added)"), rows)
 
 
-def _common_figures(diagnosis, folder: Path, unit: str, scale: float) -> list:
-    """Residual vs time of every step (stick-slip, drift and joins show there first) and the
-    error of every step against the noise floor."""
-    kind, steps = diagnosis.kind, diagnosis.steps
-    t = np.asarray(diagnosis.measurement.time, dtype=float)
+def _residual_vs_time(measurement, fits: list, folder: Path, unit: str, scale: float) -> tuple:
+    """Residual against time of each (label, fit): stick-slip, drift and the joins of
+    concatenated runs show there first."""
+    t = np.asarray(measurement.time, dtype=float)
     fig = new_figure((10, 3.5))
     ax = fig.subplots()
-    for step in steps:
-        rows = getattr(step.fit, "rows", None)
-        r = np.asarray(step.fit.residual, dtype=float)
-        ax.plot(t, (r if rows is None else np.where(rows, r, np.nan)) * scale, lw=0.6, label=step_label(step))
+    for label, fit in fits:
+        rows = getattr(fit, "rows", None)
+        r = np.asarray(fit.residual, dtype=float)
+        ax.plot(t, (r if rows is None else np.where(rows, r, np.nan)) * scale, lw=0.6, label=label)
     ax.set(xlabel="time [s]", ylabel=f"residual [{unit}]", title="residual vs time")
     ax.legend(fontsize=8)
-    out = [(save(fig, folder / "residual_vs_time.png"), "Residual (measured − model) against time, every step.")]
+    return save(fig, folder / "residual_vs_time.png"), "Residual (measured − model) against time."
+
+
+def _common_figures(diagnosis, folder: Path, unit: str, scale: float) -> list:
+    """Residual vs time of every step and the error of every step against the noise floor."""
+    kind, steps = diagnosis.kind, diagnosis.steps
+    out = [_residual_vs_time(diagnosis.measurement, [(step_label(s), s.fit) for s in steps], folder, unit, scale)]
     fig = new_figure((7, 4))
     ax = fig.subplots()
     keys = list(kind.fit_errors(steps[0].fit))
@@ -379,3 +384,35 @@ def diagnosis_page(diagnosis, folder, summary: dict, scale_numbers) -> Path:
         page.figure(path, caption)
     page.heading("Reproduce").table(("", ""), provenance(diagnosis.measurement))
     return page.write(folder)
+
+
+def fit_page(result, folder, summary: dict, kind, scale_numbers=None) -> Path:
+    """Write the page of a fit (``hdsim fit --report DIR``) into ``folder``: a summary, the
+    data checks, the fitted parameters rounded to their uncertainty, the residual against
+    time and the kind's figures of a fit (`TestKind.fit_figures`), and how to reproduce it.
+    Returns ``index.html``."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    unit, scale = kind.report_unit
+    meas = result.measurement
+    suffix = kind.error_key.split("_", 1)[1]
+    floor = summary.get(f"noise_floor_{suffix}") or (summary.get("whiteness") or {}).get(f"noise_floor_{suffix}")
+    page = Page(f"Fit of {meas.source}")
+    page.table(("summary", ""), [
+        ("test", meas.test.replace("_", " ")), ("effects", ", ".join(result.families) or "the base model"),
+        ("rows fitted", str(summary.get("rows", result.n))),
+        (f"rms [{unit}]", f"{summary[kind.error_key] * scale:.3g}" + (f" (noise floor {floor * scale:.3g})"
+                                                                     if floor else ""))])
+    checks = [(c["status"], c["check"], c["message"]) for c in summary.get("checks", [])]
+    if checks:
+        page.heading("The data").table(CHECK_HEAD, checks)
+    _parameters(page, {"final": {"params": summary.get("params") or summary.get("fitted") or {},
+                                 "uncertainty": summary.get("uncertainty") or {}}})
+    figures = [_residual_vs_time(meas, [("+".join(result.families) or "base", result)], folder, unit, scale)]
+    figures += kind.fit_figures(result, folder, scale_numbers)
+    page.heading("Figures")
+    for path, caption in figures:
+        page.figure(path, caption)
+    page.heading("Reproduce").table(("", ""), provenance(meas))
+    return page.write(folder)
+

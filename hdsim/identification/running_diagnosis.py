@@ -35,6 +35,7 @@ reported as ``ambiguous``, with the measurement that would separate them.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 
@@ -138,6 +139,13 @@ class RunningTorqueTest(TestKind):
         from hdsim.identification.running_report import running_figures  # matplotlib only when asked
 
         return running_figures(diagnosis, folder, (scale.running_torque or None) if scale else None)
+
+    def fit_figures(self, result, folder, scale):
+        from hdsim.identification.running_report import fit_figures
+
+        paths = fit_figures(result, Path(folder) / "fit", (scale.running_torque or None) if scale else None)
+        return list(zip(paths, ("Plateau running torques against speed, with the fitted law and the catalog point.",
+                                "What the law without its ripple leaves, against the wave-generator angle.")))
 
     def report_sections(self, diagnosis, diagnosis_json):
         from hdsim.identification.running_report import running_sections

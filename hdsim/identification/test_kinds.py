@@ -179,6 +179,11 @@ class TestKind:
         of every step are drawn for every kind."""
         return []
 
+    def fit_figures(self, result, folder, scale) -> list:
+        """The kind's figures of a fit's page (``hdsim fit --report``), drawn into ``folder``:
+        [(path, caption)] (the residual against time is drawn for every kind)."""
+        return []
+
     def report_sections(self, diagnosis, diagnosis_json: dict) -> list:
         """The kind's tables of a diagnosis report: [(heading, (head, rows))]."""
         return []
