@@ -89,8 +89,9 @@ def main(argv=None) -> int:
             if debug:
                 raise
             return _internal_error(args.verb, exc)
-        where = f" {exc.filename}" if exc.filename else ""
-        print(f"hdsim {args.verb}: error: cannot write{where}: {exc.strerror or _one_line(exc)}", file=sys.stderr)
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"hdsim {args.verb}: error: {where}{exc.strerror or _one_line(exc)} (the machine refused it: "
+              "permission, a read-only or full disk)", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"hdsim {args.verb}: interrupted", file=sys.stderr)
