@@ -92,10 +92,10 @@ def run(args) -> int:
     from hdsim.atomic import check_writable_folder
     from hdsim.errors import InputError
     from hdsim.identification.test_kinds import test_kind
-    from hdsim.identification.workflow import examine_record, fit
+    from hdsim.identification.workflow import prepare_record
 
     meas, effects = load_inputs(args)
-    checks, data, wrong, scale = examine_record(meas, args.unit)
+    meas, checks, data, wrong, scale = prepare_record(meas, args.unit)
     if wrong:
         raise InputError(f"{meas.source}: this is not a {meas.test} test: {wrong}")
     kind = test_kind(meas.test)
@@ -103,7 +103,7 @@ def run(args) -> int:
     check_writable_folder(out.parent)  # before the fit, not after it
     if args.report:
         check_writable_folder(args.report)
-    result = fit(meas, effects, unit=args.unit)
+    result = kind.fit(meas, effects, unit=args.unit)  # the record prepare_record prepared
     result.save(out)
     summary = kind.fit_summary(result, out.with_suffix(""), scale)
     summary["parameters_file"] = str(out)

@@ -258,16 +258,17 @@ def breakaway_checks(meas, scale) -> tuple[list, dict]:
     side = abs(rec.side_factor)
     checks = []
     output_torque = np.asarray(meas.torque, dtype=float) * (1.0 if meas.torque_side == "output" else meas.ratio)
-    if scale is not None and not slipping_starts(meas.time, meas.angle, output_torque, scale):
-        rec.starts = []  # rests that held nothing, or ended in an elastic twist: a locked drive
+    # rests that held nothing, or ended in an elastic twist, are a locked drive's: no start
+    starts = rec.starts if scale is None or slipping_starts(meas.time, meas.angle, output_torque, scale) else []
+    if not starts:
         checks.append(Check("broke_away", "fail", "the shaft never started from rest (no rest that held the "
                             "torque followed by a turn beyond the drive's elastic twist): this is not a "
                             "breakaway test"))
         return checks, {"starts": 0}
     where = ", ".join(f"{'forward' if s.direction > 0 else 'reverse'} at {float(meas.time[s.onset]):.3g} s, "
-                      f"{abs(s.torque) * side:.3g} N·m" for s in rec.starts[:6])
-    checks.append(Check("broke_away", "ok", f"{len(rec.starts)} start(s) from rest: {where}"))
-    ways = {s.direction for s in rec.starts}
+                      f"{abs(s.torque) * side:.3g} N·m" for s in starts[:6])
+    checks.append(Check("broke_away", "ok", f"{len(starts)} start(s) from rest: {where}"))
+    ways = {s.direction for s in starts}
     if len(ways) < 2:
         checks.append(Check("both_directions", "warn", "the shaft started one way only: the other direction's "
                             "starting torque, and any asymmetry, cannot be told"))
@@ -281,7 +282,7 @@ def breakaway_checks(meas, scale) -> tuple[list, dict]:
                             f"{ratio:.2g}× the catalog's {catalog * side:.3g} N·m of {scale.name} on the "
                             f"{meas.torque_side} shaft" + ("" if status == "ok" else
                                                            ": a torque on the other shaft, or in other units?")))
-    return checks, {"starts": len(rec.starts), "directions": len(ways)}
+    return checks, {"starts": len(starts), "directions": len(ways)}
 
 
 class BreakawayTest(RunningTorqueTest):
@@ -312,11 +313,6 @@ class BreakawayTest(RunningTorqueTest):
 
     def session(self, meas, chosen, *, unit=None, candidates=None, max_steps=None):
         return BreakawaySession(meas, chosen)
-
-    def diagnose(self, meas, effects=None, *, unit=None, families=None, candidates=None, max_rounds=None,
-                 max_steps=None, log=None):
-        return super(RunningTorqueTest, self).diagnose(meas, effects, unit=unit, families=families,
-                                                       max_rounds=max_rounds, log=log)
 
     def fit_json(self, fit) -> dict:
         return {"fitted": fit.fitted, "uncertainty": fit.uncertainty}
@@ -358,12 +354,11 @@ class BreakawaySession(RunningSession):
     fold_rule = "alternate blocks of 10 ms of the rows each start moves"
     widens = False
 
-    def __init__(self, meas, chosen: dict):
-        self.record = BreakawayRecord.of(meas)
-        self.measurement = self.record.measurement
-        self.chosen = dict(chosen)
-        self.folds = _blocks(self.record)
-        self.passes = 0
+    record_of = staticmethod(BreakawayRecord.of)
+
+    @staticmethod
+    def folds_of(record):
+        return _blocks(record)
 
     def fit_model(self, ids, rows=None, widened=()):
         by_id = {v: k for k, v in FAMILY_IDS.items()}
@@ -374,10 +369,6 @@ class BreakawaySession(RunningSession):
 
     def forms(self, family: str) -> tuple:
         return (FAMILY_IDS[family],)
-
-    @property
-    def floor(self) -> float:
-        return self.record.noise_floor * abs(self.record.side_factor)
 
 
 def _blocks(rec: BreakawayRecord) -> tuple[list, list]:

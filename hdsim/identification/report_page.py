@@ -177,10 +177,11 @@ def _summary_box(page: Page, d: dict, unit: str, scale: float) -> None:
     page.table(("summary", ""), rows)
 
 
-def _parameters(page: Page, d: dict) -> None:
-    final = d.get("final") or {}
-    values = final.get("params") or final.get("fitted") or {}
-    sigma = final.get("uncertainty") or {}
+def _parameters(page: Page, fitted: dict) -> None:
+    """The fitted values (a fit's JSON: ``params`` or ``fitted``, and ``uncertainty``) rounded
+    to their uncertainty."""
+    values = fitted.get("params") or fitted.get("fitted") or {}
+    sigma = fitted.get("uncertainty") or {}
     rows = [(name, rounded(float(v), sigma.get(name))) for name, v in values.items()]
     if rows:
         page.heading("Fitted parameters (SI; torques of a torque test on the wave-generator shaft)")
@@ -374,7 +375,7 @@ def diagnosis_page(diagnosis, folder, summary: dict, scale_numbers) -> Path:
         page.text("Final model:").bullets(d["findings"]["final"])
     w = d["whiteness"]
     page.text(f"Ljung–Box Q = {w['ljung_box_q']:.1f}, p = {w['p_value']:.3g}." if "ljung_box_q" in w else "")
-    _parameters(page, d)
+    _parameters(page, d.get("final") or {})
     for heading, head_rows in kind.report_sections(diagnosis, d):
         page.heading(heading).table(*head_rows)
     figures = _common_figures(diagnosis, folder, unit, scale)
@@ -406,8 +407,7 @@ def fit_page(result, folder, summary: dict, kind, scale_numbers=None) -> Path:
     checks = [(c["status"], c["check"], c["message"]) for c in summary.get("checks", [])]
     if checks:
         page.heading("The data").table(CHECK_HEAD, checks)
-    _parameters(page, {"final": {"params": summary.get("params") or summary.get("fitted") or {},
-                                 "uncertainty": summary.get("uncertainty") or {}}})
+    _parameters(page, summary)
     figures = [_residual_vs_time(meas, [("+".join(result.families) or "base", result)], folder, unit, scale)]
     figures += kind.fit_figures(result, folder, scale_numbers)
     page.heading("Figures")

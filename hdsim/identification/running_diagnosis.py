@@ -46,7 +46,7 @@ from hdsim.identification.residuals import EXPLAINED_RATIO, whiteness
 from hdsim.identification.running_fit import SweepRecord, fit_running, running_plausibility
 from hdsim.identification.test_kinds import TestKind, register_test_kind, test_kind
 from hdsim.io.measurement import Measurement
-from hdsim.model.running_terms import RUNNING_FAMILIES, RUNNING_FORMS, parse_running_effects, parse_running_forms
+from hdsim.model.running_terms import RUNNING_FAMILIES, RUNNING_FORMS, parse_running_forms
 
 __all__ = ["RunningTorqueTest", "RunningSession", "diagnose_running", "running_limits", "RUNNING_THRESHOLDS"]
 
@@ -97,8 +97,8 @@ class RunningTorqueTest(TestKind):
 
     def diagnose(self, meas, effects=None, *, unit=None, families=None, candidates=None, max_rounds=None,
                  max_steps=None, log=None):
-        if families is not None:
-            families = parse_running_effects(families)
+        if families is not None:  # the kind's names (a form's id names its family)
+            families = list(self.parse_effects(families))
         return super().diagnose(meas, effects, unit=unit, families=families, max_rounds=max_rounds, log=log)
 
     def fit_errors(self, fit) -> dict:
@@ -171,11 +171,21 @@ class RunningSession:
     widens = True
 
     def __init__(self, meas, chosen: dict):
-        self.record = meas if isinstance(meas, SweepRecord) else SweepRecord.of(meas)
+        self.record = self.record_of(meas)
         self.measurement = self.record.measurement
         self.chosen = dict(chosen)
-        self.folds = _halves(self.record)
+        self.folds = self.folds_of(self.record)
         self.passes = 0
+
+    @staticmethod
+    def record_of(meas):
+        """The kind's record of ``meas`` (speed, plateaus, moving rows)."""
+        return meas if isinstance(meas, SweepRecord) else SweepRecord.of(meas)
+
+    @staticmethod
+    def folds_of(record) -> tuple[list, list]:
+        """(training rows, held-out rows) of the two hold-out folds."""
+        return _halves(record)
 
     def fit_model(self, families, rows=None, widened=()):
         """The law with ``families`` fitted on ``rows`` (default every moving row)."""

@@ -28,30 +28,45 @@ from hdsim.io.data_checks import DriveScale, import_checks, wrong_test
 from hdsim.io.measurement import Measurement
 from hdsim.model.catalog import load_unit
 
-__all__ = ["diagnose", "fit", "BenchDiagnosis", "WrongTest", "examine", "examine_record", "test_kind"]
+__all__ = ["diagnose", "fit", "BenchDiagnosis", "WrongTest", "examine", "examine_record", "prepare_record",
+           "test_kind"]
 
 
 def examine(meas: Measurement, scale: DriveScale) -> tuple[list, dict, str]:
     """Every check of a record before a fit: (checks, data summary, wrong-test sentence or '').
 
-    The checks are the import's (`hdsim.io.data_checks.import_checks`) and the record's
-    test kind's (`TestKind.checks`). The data summary holds ``rows``, ``dropped_rows`` and
-    the kind's figures (noise floors, reversals, loading rates, speeds …).
+    The checks are the import's (`hdsim.io.data_checks.import_checks`), what the kind's
+    `TestKind.prepare` changed, and the record's test kind's (`TestKind.checks`). The data
+    summary holds ``rows``, ``dropped_rows`` and the kind's figures (noise floors,
+    reversals, loading rates, speeds …).
     """
-    meas, turned = test_kind(meas.test).prepare(meas)
-    checks, figures = test_kind(meas.test).checks(meas, scale)
+    return _examine(meas, scale)[1:]
+
+
+def _examine(meas: Measurement, scale: DriveScale) -> tuple:
+    """(the prepared record, checks, data summary, wrong-test sentence): `examine`, keeping
+    the record the kind prepared, so that what is fitted is prepared once."""
+    kind = test_kind(meas.test)
+    meas, turned = kind.prepare(meas)
+    checks, figures = kind.checks(meas, scale)
     checks = import_checks(meas) + list(turned) + list(checks)
     data = {"rows": len(meas), "dropped_rows": meas.rows.dropped_rows, **figures}
-    return checks, data, wrong_test(checks)
+    return meas, checks, data, wrong_test(checks)
 
 
 def examine_record(meas: Measurement, unit=None) -> tuple[list[dict], dict, str, DriveScale]:
     """(checks as JSON objects, data summary, wrong-test sentence or '', the drive's
     `hdsim.io.data_checks.DriveScale`) of a record against the named drive (`examine`)."""
+    return prepare_record(meas, unit)[1:]
+
+
+def prepare_record(meas: Measurement, unit=None) -> tuple:
+    """(the record in its kind's conventions, then what `examine_record` gives): the one
+    place a record is prepared and checked before a fit or a diagnosis."""
     drive = unit if unit is not None and not isinstance(unit, str) else load_unit(unit)
     scale = DriveScale.of(drive)
-    checks, data, wrong = examine(meas, scale)
-    return [c.to_json() for c in checks], data, wrong, scale
+    meas, checks, data, wrong = _examine(meas, scale)
+    return meas, [c.to_json() for c in checks], data, wrong, scale
 
 
 @dataclass
@@ -163,10 +178,10 @@ def diagnose(measurement: Measurement, effects=None, *, unit=None, families=None
         ``wrong_test``) when the record is not the test it claims.
     """
     kind = test_kind(measurement.test)
-    checks, data, wrong, scale = examine_record(measurement, unit)
+    prepared, checks, data, wrong, scale = prepare_record(measurement, unit)
     if wrong:
         return WrongTest(measurement, wrong, checks, data)
-    measurement, _ = kind.prepare(measurement)  # its checks are among the record's
+    measurement = prepared
     result = kind.diagnose(measurement, effects, unit=unit, families=families, candidates=candidates,
                            max_rounds=max_rounds, max_steps=max_steps, log=log)
     summary = result.to_json()
