@@ -163,16 +163,20 @@ def provenance(measurement) -> list[tuple[str, str]]:
     return rows
 
 
-def _summary_box(page: Page, d: dict, unit: str, scale: float) -> None:
+def _floor_key(kind) -> str:
+    """The JSON key of the noise floor in the kind's error unit (``noise_floor_rad`` …)."""
+    return "noise_floor_" + kind.error_key.split("_", 1)[1]
+
+
+def _summary_box(page: Page, d: dict, kind) -> None:
     """One sentence of outcome, the families added, the error before → after against the
     noise floor, and the next measurement: the page in four lines."""
-    key = next((k for k in d["baseline"] if k.startswith("rmse_")), None)
-    floor = d["whiteness"].get("noise_floor_" + key.split("_", 1)[1]) if key else None
+    unit, scale = kind.report_unit
+    key, floor = kind.error_key, d["whiteness"].get(_floor_key(kind))
     rows = [("outcome", d.get("outcome", "").replace("_", " ") or "—"),
-            ("added", ", ".join(d["added"]) or "nothing")]
-    if key:
-        rows.append((f"rms [{unit}]", f"{d['baseline'][key] * scale:.3g} → {d['final'][key] * scale:.3g}"
-                     + (f" (noise floor {floor * scale:.3g})" if floor else "")))
+            ("added", ", ".join(d["added"]) or "nothing"),
+            (f"rms [{unit}]", f"{d['baseline'][key] * scale:.3g} → {d['final'][key] * scale:.3g}"
+             + (f" (noise floor {floor * scale:.3g})" if floor else ""))]
     rows.append(("next measurement", d.get("next_measurement") or "none needed"))
     page.table(("summary", ""), rows)
 
@@ -218,7 +222,7 @@ def _number(value, scale: float) -> str:
 
 def _error_columns(kind, row: dict) -> list[str]:
     fixed = {"step", "effects", "added", "provisional", "other_form", "score"}
-    return [k for k in row if k not in fixed and k.endswith("_" + kind.error_key.split("_", 1)[1])]
+    return [k for k in row if k not in fixed and k.endswith(_floor_key(kind)[len("noise_floor"):])]
 
 
 def _before_after(kind, d: dict, unit: str, scale: float):
@@ -318,7 +322,7 @@ def _common_figures(diagnosis, folder: Path, unit: str, scale: float) -> list:
     for j, key in enumerate(keys):
         ax.bar(x + (j - (len(keys) - 1) / 2) * width, [kind.fit_errors(s.fit)[key] * scale for s in steps], width,
                label=f"{ERROR_NAMES.get(key.rsplit('_', 1)[0], key)} error")
-    floor = diagnosis.whiteness.get("noise_floor_" + kind.error_key.split("_", 1)[1])
+    floor = diagnosis.whiteness.get(_floor_key(kind))
     if floor:
         ax.axhline(floor * scale, color="k", ls=":", lw=1, label="noise floor (final residual)")
     ax.set_xticks(x, [step_label(s) for s in steps], rotation=15, fontsize=8)
@@ -354,7 +358,7 @@ def diagnosis_page(diagnosis, folder, summary: dict, scale_numbers) -> Path:
     unit, scale = kind.report_unit
     d = {**diagnosis.to_json(), **summary}
     page = Page(f"Diagnosis of {diagnosis.measurement.source}")
-    _summary_box(page, d, unit, scale)
+    _summary_box(page, d, kind)
     page = _top(page, d)
     page.text(f"{kind.name.replace('_', ' ')} test, {len(diagnosis.measurement)} rows; hold-out folds by "
               f"{d['holdout']}.")
@@ -396,8 +400,7 @@ def fit_page(result, folder, summary: dict, kind, scale_numbers=None) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     unit, scale = kind.report_unit
     meas = result.measurement
-    suffix = kind.error_key.split("_", 1)[1]
-    floor = summary.get(f"noise_floor_{suffix}") or (summary.get("whiteness") or {}).get(f"noise_floor_{suffix}")
+    floor = summary.get(_floor_key(kind)) or (summary.get("whiteness") or {}).get(_floor_key(kind))
     page = Page(f"Fit of {meas.source}")
     page.table(("summary", ""), [
         ("test", meas.test.replace("_", " ")), ("effects", ", ".join(result.families) or "the base model"),
