@@ -76,5 +76,6 @@ def test_sobol_cli_on_the_simulator(tmp_path, cli):
     model = dict(data["model"])
     fingerprint = model.pop("fingerprint")  # of the drive's parameters and the scenario
     assert isinstance(fingerprint, str) and len(fingerprint) == 16
+    assert model.pop("evaluator") == "quasistatic"  # the ±4 % test is (tests/test_evaluator.py)
     assert model == {"unit": "CSG-25-100", "output": "lost_motion_arcmin", "scenario": None}
     assert max(data["ST"], key=data["ST"].get) == "h_pz"  # the rim under the teeth leads

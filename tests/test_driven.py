@@ -221,7 +221,8 @@ def test_cli_simulate_driven_json(tmp_path, cli, monkeypatch, png_image, short_k
 
     asked = []
 
-    def shared_run(model, scenario):
+    def shared_run(model, scenario, evaluator="dynamic"):
+        assert evaluator == "dynamic"  # the default of simulate: the time series is the product
         unit = load_unit("CSG-25-100")
         assert model.name == unit.name and model.params() == unit.params()
         assert {k: e.id for k, e in model.effects().items()} == {k: e.id for k, e in unit.effects().items()}

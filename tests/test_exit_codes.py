@@ -94,7 +94,7 @@ def test_a_full_or_read_only_disk_met_while_writing_is_bad_input_other_os_errors
 
     from hdsim.cli import simulate
 
-    monkeypatch.setattr(simulate, "run_scenario", lambda model, scenario: None)  # the write fails, not the run
+    monkeypatch.setattr(simulate, "run_scenario", lambda model, scenario, **_: None)  # the write fails, not the run
     monkeypatch.setattr(_common, "write_outputs", full)
     got, _, err = cli("simulate", "lost_motion", "--out", str(tmp_path / "out"))
     assert got == code and len(err.strip().splitlines()) == 1

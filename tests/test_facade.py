@@ -74,7 +74,7 @@ def test_sobol_on_a_modified_drive_and_a_scenario_object():
     summary = result.to_json()
     assert CONTRACT_KEYS <= set(summary) and summary["output"] == "lost_motion_arcmin"
     assert summary["model"]["unit"] == "CSG-25-100"
-    assert summary["model"]["fingerprint"] == drive_fingerprint(drive, scenario)
+    assert summary["model"]["fingerprint"] == drive_fingerprint(drive, scenario, summary["model"]["evaluator"])
     # the gap is ±10 % around the modified drive's value, not the catalog's
     assert result.problem.bounds[1] == pytest.approx((1.8e-5, 2.2e-5))
 
@@ -131,7 +131,7 @@ def test_sobol_cli_on_a_fitted_model_file(fitted_file, tmp_path, capsys):
     assert CONTRACT_KEYS <= set(out) and out["evaluations"] == 8 * 4
     assert out["params"] == ["h_pz", "backlash.gap"]
     fitted, scenario = load_fitted(fitted_file), load_scenario(scenario_file)
-    assert out["model"]["fingerprint"] == drive_fingerprint(fitted, scenario)
+    assert out["model"]["fingerprint"] == drive_fingerprint(fitted, scenario, out["model"]["evaluator"])
     assert out["model"]["fingerprint"] != drive_fingerprint(load_unit(), scenario)
 
 

@@ -25,6 +25,10 @@ def register(subparsers) -> None:
     _common.add_set_argument(p)
     p.add_argument("--out", default="hdsim-out", help="output folder (default ./hdsim-out)")
     p.add_argument("--no-figures", action="store_true", help="write the HDF5 result only")
+    p.add_argument("--evaluator", choices=("dynamic", "quasistatic", "auto"), default="dynamic",
+                   help="'dynamic' (default): solve_ivp on the full model, the reference; "
+                        "'quasistatic': inertia dropped (locked bench only); 'auto': the latter where "
+                        "the bench's criterion holds")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.set_defaults(func=main)
 
@@ -35,12 +39,13 @@ def main(args) -> int:
     scenario = load_scenario(args.scenario)
     model, scenario = _common.apply_sets(load_unit(args.unit), scenario, _common.parse_sets(args.sets))
     check_writable_folder(args.out)  # an unwritable folder is said before the run, not after it
-    run = run_scenario(model, scenario)
+    run = run_scenario(model, scenario, evaluator=args.evaluator)
     paths = _common.write_outputs(run, Path(args.out), figures=not args.no_figures)
     metrics = _common.metrics_as_floats(run.metrics)
     if args.json:
         emit_json({"scenario": scenario.name, "unit": model.name, "metrics": metrics,
-                   "result": paths["result"], "files": paths})
+                   "result": paths["result"], "files": paths,
+                   "evaluator": run.result.metadata["evaluator"]["chosen"]})
     else:
         _common.print_metrics(f"{scenario.name} on {model.name}:", metrics)
         print(f"result: {paths['result']}")

@@ -44,6 +44,10 @@ def register(subparsers) -> None:
     p.add_argument("--scenario", metavar="NAME|FILE.toml",
                    help="scenario the metric comes from (--unit): a built-in name or a "
                         "scenario file (default: the built-in scenario reporting --output)")
+    p.add_argument("--evaluator", choices=("auto", "dynamic", "quasistatic"), default="auto",
+                   help="--unit: 'auto' (default) runs a quasi-static scenario (the ±4 %% lost-motion "
+                        "test) through the quasi-static evaluator, anything else through solve_ivp; "
+                        "'dynamic' forces solve_ivp")
     p.add_argument("--n", default="1024", help="base points N, a power of 2 (default 1024)")
     p.add_argument("--second-order", action="store_true", help="also estimate S2")
     p.add_argument("--seed", default="0", help="scramble seed (default 0)")
@@ -88,6 +92,8 @@ def run(args) -> int:
     summary = result.to_json(output)
     summary["seconds"] = round(time.perf_counter() - t0, 3)
     summary.update(_extras(args, model, analytic, problem.names, result))
+    if getattr(func, "choice", None):  # a --unit study: which evaluator ran and why
+        summary["evaluator"] = func.choice
     _write_outputs(args, summary, result, analytic, target)
     if args.json:
         from hdsim.cli import emit_json
@@ -121,7 +127,7 @@ def _resolve(args, models):
         if not names:
             raise InputError("--unit studies need --params NAME,NAME,...")
         return models.from_unit(_drive(args.unit), names, args.output, args.scenario, frac,
-                                bounds, dists)
+                                bounds, dists, evaluator=args.evaluator)
     raise InputError("say what to study: --unit U, --function NAME or --model MODULE:CALLABLE")
 
 
@@ -192,6 +198,9 @@ def _print_table(s) -> None:
                 s["ST"][nm], s["ST_conf"][nm], s["ST_conf_replicates"][nm])
         print(f"{nm:>12} " + " ".join("     nan" if v is None else f"{v:8.4f}" for v in vals))
     print("checks: " + ("all pass" if s["checks"]["ok"] else "FAILED (see stderr)"))
+    choice = s.get("evaluator")
+    if choice:
+        print(f"evaluator: {choice['chosen']} ({choice['reason']})")
 
 
 def _int(text, option) -> int:

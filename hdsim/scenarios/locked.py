@@ -15,8 +15,12 @@ from hdsim.model.drive import HarmonicDrive
 from hdsim.scenarios.limits import refuse_if_too_large
 from hdsim.scenarios.locked_metrics import METRIC_GROUPS, locked_metrics
 from hdsim.scenarios.setups import Setup
+from hdsim.simulation.driven import sample_model
 from hdsim.simulation.path import locked_wave_generator
-from hdsim.simulation.solver import SolverOptions, integrate
+from hdsim.simulation.quasistatic import locked_twist
+from hdsim.simulation.solver import SimulationResult, SolverOptions, integrate
+
+LOCKED_SETUP = "locked_wave_generator"
 
 #: the scenario tables of this bench: the torque cycle, in fractions of the rated torque T_N
 SCHEMA = {"load": {"amplitude": float, "cycles": int, "rate": float}}
@@ -148,5 +152,97 @@ def run_locked(model: HarmonicDrive, scenario, *, samples_per_segment: int | Non
     return scenario, result, metrics
 
 
-LOCKED = Setup(name="locked_wave_generator", schema=SCHEMA, required=REQUIRED, runner=run_locked,
-               metrics=METRIC_GROUPS, check=check)
+# ------------------------------------------------------------------ quasi-static evaluator
+#: a ramp at least this many periods of the output's first torsional mode long is loaded
+#: quasi-statically: the inertial torque of a cosine ramp of duration D is
+#: ``(T_n / 2D)² / 2`` of the elastic one, 1.3e-5 at D = 100 T_n
+MIN_PERIODS_PER_RAMP = 100.0
+
+#: the metric groups the quasi-static evaluator reproduces within 1e-3 relative
+#: (docs/sensitivity.md, "Which evaluator": 1.2e-4 on 1024 rows of the seed study's box).
+#: The others read the twist where the torque crosses zero, inside the dead zone's
+#: boundary layer that dropping the inertia removes: hysteresis loss and centre-line lost
+#: motion differ by ~1 %, K1 by ~2 %, and these stay with the dynamic model under "auto".
+QUASISTATIC_GROUPS = ("lost_motion",)
+
+#: quasi-static steps per ramp at least (the output samples are a subset of them): the
+#: fitted damping rate and the sub-stepped friction laws agree with the dynamic model
+#: within 1.4e-4 at 4 steps, 1.3e-4 at 8 and 1.2e-4 at 16 on the seed study's box
+QUASISTATIC_STEPS_PER_RAMP = 4
+
+
+def first_period(model: HarmonicDrive, amplitude: float) -> float:
+    """Period [s] of the output's torsional mode at its stiffest over a ±amplitude·T_N cycle.
+
+    ``2π √(J_out / K_max)`` with ``K_max`` the largest tangent of the hardening law up to
+    twice the twist the base stiffness gives at the amplitude (the law hardens, so the
+    real twist is smaller); the shortest period of a batch.
+    """
+    c_struct, c_mesh = model.split()
+    k0 = 1.0 / (np.asarray(c_struct, dtype=float) + np.asarray(c_mesh, dtype=float))
+    reach = 2.0 * amplitude * np.asarray(model.drive.rated_torque, dtype=float) / k0
+    twist = np.linspace(0.0, 1.0, 33)[:, None] * np.atleast_1d(reach)[None, :]
+    k_max = float(np.max(np.abs(model.hardening.tangent(twist, c_struct, c_mesh))))
+    return float(2.0 * np.pi * np.sqrt(np.min(np.asarray(model.drive.J_out, dtype=float)) / k_max))
+
+
+def quasistatic_criterion(model: HarmonicDrive, scenario):
+    """Whether the quasi-static evaluator reproduces the dynamic one (`Setup.quasistatic_criterion`).
+
+    It does when every ramp lasts `MIN_PERIODS_PER_RAMP` periods of the first mode
+    (`first_period`) and every metric group of the scenario is in `QUASISTATIC_GROUPS`.
+    Every friction, damping and hardening law runs in the quasi-static evaluator
+    (`hdsim.simulation.quasistatic`), so the laws do not enter.
+    """
+    period = first_period(model, scenario.data["load"]["amplitude"])
+    ramp = float(np.min(np.diff(scenario.times())))
+    figures = {"first_period_s": period, "shortest_ramp_s": ramp, "periods_per_ramp": ramp / period,
+               "min_periods_per_ramp": MIN_PERIODS_PER_RAMP}
+    if ramp < MIN_PERIODS_PER_RAMP * period:
+        return False, (f"the shortest ramp ({ramp:.3g} s) is {ramp / period:.3g} periods of the first mode "
+                       f"({period:.3g} s), under {MIN_PERIODS_PER_RAMP:g}: the inertia matters"), figures
+    others = [g for g in scenario.metrics if g not in QUASISTATIC_GROUPS]
+    if others:
+        return False, (f"metric groups {others} read the twist at zero torque, where the quasi-static "
+                       f"evaluator drops the dead zone's boundary layer"), figures
+    return True, (f"every ramp is at least {ramp / period:.3g} periods of the first mode ({period:.3g} s) "
+                  f"and the metrics are read away from zero torque"), figures
+
+
+def run_locked_quasistatic(model: HarmonicDrive, scenario, *, samples_per_segment: int | None = None,
+                           options: SolverOptions | None = None):
+    """Run a locked-WG scenario with the inertia dropped (`Setup.quasistatic_runner`).
+
+    The torque cycle goes through `hdsim.simulation.quasistatic.locked_twist` on at
+    least `QUASISTATIC_STEPS_PER_RAMP` steps per ramp, a multiple of the output samples,
+    which are read off the steps themselves. Arguments and return as `run_locked`;
+    ``options`` (the ``solve_ivp`` tolerances) do not apply. The result has no states
+    and the signals ``torque_Nm``, ``twist_rad`` and ``drive_torque_Nm`` (= the applied
+    torque: no inertia).
+    """
+    n = samples_per_segment or scenario.samples_per_segment
+    load = scenario.data["load"]
+    refuse_if_too_large(scenario.source, samples=_samples(load["cycles"], n), duration=_duration(load),
+                        batch=model.batch_size, set_by="load.cycles, load.rate and output.samples_per_segment")
+    every = int(np.ceil(QUASISTATIC_STEPS_PER_RAMP / n))
+    steps = scenario.sample_times(n * every)
+    shape = scenario.torque_profile(1.0)(steps)
+    rated = np.broadcast_to(np.asarray(model.drive.rated_torque, dtype=float), (model.batch_size,))
+    if np.all(rated == rated[0]):
+        twist = locked_twist(model, steps, shape * rated[0])
+    else:  # one torque cycle per rated torque
+        twist = np.concatenate([locked_twist(sample_model(model, m), steps, shape * rated[m])
+                                for m in range(model.batch_size)])
+    t_eval, twist = steps[::every], np.ascontiguousarray(twist[:, ::every])
+    torque = np.ascontiguousarray(rated[:, None] * shape[None, ::every])
+    signals = {"torque_Nm": torque, "twist_rad": twist, "drive_torque_Nm": torque}
+    result = SimulationResult(t=t_eval, states={}, signals=signals, setup=LOCKED_SETUP,
+                              solver={"method": "quasistatic", "steps_per_ramp": n * every})
+    T1, T2 = breakpoints(model) if "stiffness" in scenario.metrics else (np.nan, np.nan)
+    metrics = locked_metrics(scenario.metrics, torque, twist, scenario.levels(), n, T1, T2, model.drive.rated_torque)
+    return scenario, result, metrics
+
+
+LOCKED = Setup(name=LOCKED_SETUP, schema=SCHEMA, required=REQUIRED, runner=run_locked,
+               metrics=METRIC_GROUPS, check=check, quasistatic_runner=run_locked_quasistatic,
+               quasistatic_criterion=quasistatic_criterion)

@@ -63,7 +63,7 @@ def write_run_file(path, run) -> Path:
     with atomic_path(path) as tmp:
         with h5py.File(tmp, "w") as f:
             f.attrs.update(hdsim_version=__version__, unit=run.model.name, scenario=run.scenario.name,
-                           setup=result.setup,
+                           setup=result.setup, evaluator="quasistatic" if result.solver.get("method") == "quasistatic" else "dynamic",
                            created=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"))
             f.create_dataset("t", data=result.t).attrs["unit"] = "s"
             for group, table in (("states", result.states), ("signals", result.signals)):
@@ -102,7 +102,7 @@ def read_run_file(path) -> tuple[HarmonicDrive, Scenario, SimulationResult, dict
         (or the stored drive-file table) with the stored parameters and effects, the
         scenario (its ``source`` is the file), the result (times [s], states, signals,
         solver statistics; ``metadata`` holds the file's ``unit``, ``scenario``,
-        ``hdsim_version`` and ``created``) and the metrics ``{name: (M,)}``.
+        ``hdsim_version``, ``created`` and ``evaluator``, the one that ran) and the metrics ``{name: (M,)}``.
 
     Raises
     ------
@@ -125,7 +125,7 @@ def read_run_file(path) -> tuple[HarmonicDrive, Scenario, SimulationResult, dict
             result = SimulationResult(t=f["t"][()], states=states, signals=signals, setup=str(attrs["setup"]),
                                       solver=dict(f["solver"].attrs),
                                       metadata={k: attrs[k] for k in ("unit", "scenario", "hdsim_version",
-                                                                      "created") if k in attrs})
+                                                                      "created", "evaluator") if k in attrs})
             effects = {k: str(v) for k, v in f["effects"].attrs.items()}
             scenario_toml = str(f["scenario"].attrs["toml"])
             unit = str(attrs["unit"])

@@ -15,6 +15,7 @@ import numpy as np
 from hdsim._version import __version__
 from hdsim.errors import unknown_name
 from hdsim.model.drive import HarmonicDrive
+from hdsim.scenarios.evaluator import choose_evaluator
 from hdsim.scenarios.registry import get_setup
 from hdsim.scenarios.results import read_run_file, write_run_file
 from hdsim.scenarios.scenario import Scenario, load_scenario
@@ -101,7 +102,7 @@ def solver_options(scenario: Scenario, base: SolverOptions | None = None) -> Sol
 
 
 def run_scenario(model: HarmonicDrive, scenario, *, samples_per_segment: int | None = None,
-                 options: SolverOptions | None = None) -> Run:
+                 options: SolverOptions | None = None, evaluator: str = "dynamic") -> Run:
     """Simulate a scenario on a model (single or batch) and compute its metrics.
 
     Parameters
@@ -115,23 +116,32 @@ def run_scenario(model: HarmonicDrive, scenario, *, samples_per_segment: int | N
         (driven bench).
     options : SolverOptions, optional
         Solver options; the scenario's ``[solver]`` table is applied on top.
+    evaluator : {"dynamic", "quasistatic", "auto"}
+        The dynamic model (the reference), the quasi-static evaluator of a bench that
+        has one, or the latter where the bench's criterion holds
+        (`hdsim.scenarios.evaluator`).
 
     Returns
     -------
     Run
-        The run; ``result.metadata`` holds ``unit``, ``scenario`` and ``hdsim_version``.
+        The run; ``result.metadata`` holds ``unit``, ``scenario``, ``hdsim_version`` and
+        ``evaluator`` (`EvaluatorChoice.as_dict`: what was asked, what ran and why).
 
     Raises
     ------
     InputError
-        On a bad scenario or a metric group its bench does not report.
+        On a bad scenario, a metric group its bench does not report, or an evaluator
+        the bench does not have.
     """
     scenario = load_scenario(scenario)
     setup = get_setup(scenario.setup)
     for name in scenario.metrics:
         if name not in setup.metrics:
             raise unknown_name(f"metric in scenario {scenario.name}", name, setup.metrics)
-    scenario, result, metrics = setup.runner(model, scenario, samples_per_segment=samples_per_segment,
-                                             options=solver_options(scenario, options))
-    result.metadata.update(unit=model.name, scenario=scenario.name, hdsim_version=__version__)
+    choice = choose_evaluator(setup, model, scenario, evaluator)
+    runner = setup.quasistatic_runner if choice.chosen == "quasistatic" else setup.runner
+    scenario, result, metrics = runner(model, scenario, samples_per_segment=samples_per_segment,
+                                       options=solver_options(scenario, options))
+    result.metadata.update(unit=model.name, scenario=scenario.name, hdsim_version=__version__,
+                           evaluator=choice.as_dict())
     return Run(model, scenario, result, metrics)

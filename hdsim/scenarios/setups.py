@@ -38,6 +38,13 @@ class Setup:
     check : callable, optional
         ``check(data, source)`` raises `hdsim.errors.InputError` on values out of range
         after the types are checked.
+    quasistatic_runner : callable, optional
+        A runner with the signature of ``runner`` that drops the output inertia; None
+        when the bench has no quasi-static evaluator (`hdsim.scenarios.evaluator`).
+    quasistatic_criterion : callable, optional
+        ``criterion(model, scenario) -> (holds, reason, figures)``: whether the
+        quasi-static runner reproduces the dynamic one on this scenario, one sentence
+        why, and the numbers compared.
     """
 
     name: str
@@ -46,3 +53,5 @@ class Setup:
     runner: Callable
     metrics: tuple[str, ...]
     check: Callable | None = None
+    quasistatic_runner: Callable | None = None
+    quasistatic_criterion: Callable | None = None

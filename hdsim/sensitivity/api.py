@@ -34,7 +34,7 @@ def sobol(drive, params: str | Iterable[str] | TypedBounds, output: str, *, scen
           replicates: int = 4, seed: int = 0, executor: Executor | str | None = None,
           workers: int = 2, chunksize: int | None = None, out: PathLike | None = None,
           resume: bool = False, retry_failed: bool = False, target_width: float | None = None,
-          progress: bool = True, log=None) -> StudyResult:
+          progress: bool = True, log=None, evaluator: str = "auto") -> StudyResult:
     """Sobol' indices of one simulator metric with respect to parameters of a drive.
 
     Parameters
@@ -91,6 +91,12 @@ def sobol(drive, params: str | Iterable[str] | TypedBounds, output: str, *, scen
         Progress bar on stderr when it is a terminal.
     log : callable, optional
         ``log(line)`` for warnings; default stderr.
+    evaluator : {"auto", "dynamic", "quasistatic"}
+        "auto" runs the rows through the quasi-static evaluator where the scenario is
+        quasi-static by its bench's criterion (the ±4 % lost-motion test), else through
+        ``solve_ivp``; "dynamic" forces the reference (docs/sensitivity.md, "Which
+        evaluator"). The choice, its reason and the figures of the criterion are in
+        ``result.extra["evaluator"]``.
 
     Returns
     -------
@@ -121,7 +127,7 @@ def sobol(drive, params: str | Iterable[str] | TypedBounds, output: str, *, scen
     frac = _fraction(range)
     _check_names(drive, names)
     func, problem, output, model, _ = from_unit(drive, names, output, scenario, frac, given,
-                                                dict(dists or {}), wording=PYTHON_WORDING)
+                                                dict(dists or {}), wording=PYTHON_WORDING, evaluator=evaluator)
     options = dict(seed=seed, second_order=second_order, replicates=replicates,
                    workers=workers, chunksize=chunksize, out=out, resume=resume,
                    retry_failed=retry_failed, target_width=target_width, model=model,
@@ -131,7 +137,7 @@ def sobol(drive, params: str | Iterable[str] | TypedBounds, output: str, *, scen
             result = run_study(func, problem, n, executor=pool, **options)
     else:
         result = run_study(func, problem, n, executor=executor, **options)
-    result.extra.update(model=model, output=output)
+    result.extra.update(model=model, output=output, evaluator=func.choice)
     return result
 
 

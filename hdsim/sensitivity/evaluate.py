@@ -101,14 +101,15 @@ def default_chunksize(n_rows: int) -> int:
     return int(np.clip(n_rows // 64, 8, 512))
 
 
-def _die_with_parent(parent: int) -> None:
+def _die_with_parent(parent: int | None) -> None:
     """Worker initializer: end this worker as soon as the study process is gone.
 
     A study killed with SIGKILL (the OOM killer, a batch scheduler) cannot shut its pool
     down; orphaned workers would live on and hold the study file through the descriptor
     they inherited at fork, so ``--resume`` would find it open. On Linux the kernel sends
     the worker SIGKILL when its parent dies (``PR_SET_PDEATHSIG``); elsewhere a daemon
-    thread checks the parent every 0.2 s.
+    thread checks the parent every 0.2 s. ``parent`` None: the worker's parent is a fork
+    server (`local_pool`), which exits when the study process does.
     """
     import os
     import threading
@@ -122,6 +123,8 @@ def _die_with_parent(parent: int) -> None:
             libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # PR_SET_PDEATHSIG = 1
         except (OSError, AttributeError):  # pragma: no cover - no prctl: the thread below covers it
             pass
+    if parent is None:  # forked by a fork server, which ends when the study process does
+        parent = os.getppid()
     if os.getppid() != parent:  # the parent died between fork and prctl
         os._exit(1)
 
@@ -139,13 +142,31 @@ def local_pool(workers: int):
     """A process pool of ``workers`` whose workers die with the study process.
 
     The platform's default start method is kept (fork on Linux up to Python 3.13, so
-    models defined in a notebook or a script read from stdin still reach the workers);
+    models defined in a notebook or a script read from stdin still reach the workers),
+    except after this process has run a parallel region of numba on GNU OpenMP (the
+    compiled quasi-static evaluator, `hdsim.simulation.quasistatic_compiled`): GNU
+    OpenMP is not fork-safe and its forked children abort ("fork() called from a process
+    already using GNU OpenMP"), so the workers then start from a fork server.
     `_die_with_parent` ends every worker when the study process is killed.
     """
+    import multiprocessing
     import os
 
-    return cf.ProcessPoolExecutor(max_workers=workers, initializer=_die_with_parent,
-                                  initargs=(os.getpid(),))
+    if _gnu_openmp_started():
+        return cf.ProcessPoolExecutor(max_workers=workers, initializer=_die_with_parent, initargs=(None,),
+                                      mp_context=multiprocessing.get_context("forkserver"))
+    return cf.ProcessPoolExecutor(max_workers=workers, initializer=_die_with_parent, initargs=(os.getpid(),))
+
+
+def _gnu_openmp_started() -> bool:
+    """True when numba has started its OpenMP threading layer in this process."""
+    numba = sys.modules.get("numba")
+    if numba is None or not hasattr(numba, "threading_layer"):
+        return False
+    try:
+        return numba.threading_layer() == "omp"
+    except ValueError:  # no parallel region has run in this process yet
+        return False
 
 
 @contextlib.contextmanager

@@ -14,7 +14,8 @@ from hdsim.sensitivity.functions import get_function
 from hdsim.sensitivity.problem import CLI_WORDING, build_problem
 
 
-def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, dists=None, wording=None):
+def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, dists=None, wording=None,
+              evaluator="auto"):
     """Study of a drive through the simulator: parameters by dotted name, ``output`` a metric.
 
     Parameters
@@ -32,15 +33,18 @@ def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, 
     range_frac, bounds, dists, wording
         As `hdsim.sensitivity.problem.build_problem` (``bounds`` typed, ``(low, high)``;
         ``wording`` default the command line's); nominal values come from the drive.
+    evaluator : {"auto", "dynamic", "quasistatic"}
+        Which evaluator the rows run on (`hdsim.scenarios.evaluator`).
 
     Returns
     -------
     tuple
         ``(func, problem, output, model, None)``; ``model`` is
-        ``{"unit", "output", "scenario", "fingerprint"}``: the drive's name, the
-        scenario's name (None for the default one) and
-        `hdsim.sensitivity.scenario_outputs.drive_fingerprint` of drive and scenario,
-        so resuming a study with another drive or scenario is refused.
+        ``{"unit", "output", "scenario", "fingerprint", "evaluator"}``: the drive's name,
+        the scenario's name (None for the default one),
+        `hdsim.sensitivity.scenario_outputs.drive_fingerprint` of drive, scenario and
+        evaluator, so resuming a study with another drive, scenario or evaluator is
+        refused, and the evaluator that runs (``func.choice`` says why).
 
     Notes
     -----
@@ -57,10 +61,11 @@ def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, 
     # a built-in name travels as a name; anything else (a drive file too) as the model read
     # here, so the workers neither re-read a file nor depend on the working folder
     by_name = isinstance(unit, str) and "drive_file" not in drive.provenance
-    func = batch.model_function(unit if by_name else drive, list(names), output, scenario)
+    func = batch.model_function(unit if by_name else drive, list(names), output, scenario, evaluator)
     model = {"unit": drive.name, "output": output,
              "scenario": None if scenario is None else func.scenario.name,
-             "fingerprint": batch.drive_fingerprint(drive, func.scenario)}
+             "fingerprint": batch.drive_fingerprint(drive, func.scenario, func.evaluator),
+             "evaluator": func.evaluator}
     return func, problem, output, model, None
 
 

@@ -4,7 +4,9 @@
 ``f(X)`` that maps a matrix of parameter rows ``(n, d)`` to the metric ``(n,)``: the
 rows become one *batch* model (array-valued parameters) integrated in a single
 ``solve_ivp`` call, so the Python and solver overhead is paid once per chunk, not per
-row. The drive is any `HarmonicDrive` (a built-in unit, a modified or a fitted one)
+row (the locked bench's ±4 % lost-motion test goes through the quasi-static evaluator
+instead when `hdsim.scenarios.locked.quasistatic_criterion` holds, ``evaluator="auto"``).
+The drive is any `HarmonicDrive` (a built-in unit, a modified or a fitted one)
 or the name of a built-in unit; the scenario is a built-in name, a scenario file or a
 `Scenario`. Both travel to the workers inside the callable (they pickle). Rows whose
 geometry is impossible, or on which the solver fails, come back NaN; the sensitivity
@@ -23,6 +25,8 @@ from hdsim.errors import InputError, SolverError, unknown_name
 from hdsim.model.catalog import load_unit
 from hdsim.model.drive import HarmonicDrive
 from hdsim.model.geometry import FlexsplineGeometry
+from hdsim.scenarios.evaluator import choose_evaluator
+from hdsim.scenarios.registry import get_setup
 from hdsim.scenarios.run import run_scenario
 from hdsim.scenarios.scenario import Scenario, load_scenario
 from hdsim.simulation.solver import SolverOptions
@@ -73,7 +77,7 @@ def as_drive(drive) -> HarmonicDrive:
     raise InputError(f"expected a HarmonicDrive or a unit name, got {type(drive).__name__}")
 
 
-def drive_fingerprint(drive: HarmonicDrive, scenario: Scenario | None = None) -> str:
+def drive_fingerprint(drive: HarmonicDrive, scenario: Scenario | None = None, evaluator: str = "dynamic") -> str:
     """A short hash of everything an evaluation depends on: parameters, effects, scenario.
 
     Two drives have the same fingerprint exactly when their names, effect classes and
@@ -86,6 +90,10 @@ def drive_fingerprint(drive: HarmonicDrive, scenario: Scenario | None = None) ->
         The model (single or batch).
     scenario : Scenario, optional
         Its table is hashed too.
+    evaluator : str
+        The evaluator the rows run on; a quasi-static study's fingerprint differs from a
+        dynamic one's (their values agree within 1e-3, not to the last digit). The
+        dynamic one hashes as before the evaluator existed.
 
     Returns
     -------
@@ -93,6 +101,8 @@ def drive_fingerprint(drive: HarmonicDrive, scenario: Scenario | None = None) ->
         16 hexadecimal digits.
     """
     state = {"drive": _canonical(drive), "scenario": None if scenario is None else scenario.data}
+    if evaluator != "dynamic":
+        state["evaluator"] = evaluator
     text = json.dumps(state, sort_keys=True, default=repr)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
@@ -183,6 +193,11 @@ class ScenarioMetric:
         The scenario, or a built-in scenario name or file.
     chunksize : int
         Rows per task the study engine should send (larger chunks amortise overhead).
+    evaluator : str
+        ``"dynamic"`` or ``"quasistatic"``: the evaluator every row runs on, chosen once
+        per study (`model_function`) so that no row depends on its chunk.
+    choice : dict, optional
+        Why (`hdsim.scenarios.evaluator.EvaluatorChoice.as_dict`), for the study file.
     """
 
     drive: HarmonicDrive | str
@@ -190,6 +205,8 @@ class ScenarioMetric:
     output: str
     scenario: Scenario | str
     chunksize: int = 1024
+    evaluator: str = "dynamic"
+    choice: dict | None = None
 
     def __call__(self, X: ArrayLike) -> np.ndarray:
         X = np.atleast_2d(np.asarray(X, dtype=float))
@@ -223,7 +240,7 @@ class ScenarioMetric:
         scenario = load_scenario(self.scenario)
         try:
             run = run_scenario(self._model(X), scenario, options=STUDY_SOLVER,
-                               samples_per_segment=STUDY_SAMPLES.get(scenario.name))
+                               samples_per_segment=STUDY_SAMPLES.get(scenario.name), evaluator=self.evaluator)
         except SolverError:
             if len(X) == 1:
                 return np.array([np.nan])
@@ -306,7 +323,7 @@ def series_function(drive, names, signal: str, scenario) -> ScenarioSeries:
                           tuple(resolve_names(model, names)), signal, load_scenario(scenario))
 
 
-def model_function(drive, names, output: str, scenario=None) -> ScenarioMetric:
+def model_function(drive, names, output: str, scenario=None, evaluator: str = "auto") -> ScenarioMetric:
     """The study callable for ``output`` of ``scenario`` on ``drive``.
 
     Parameters
@@ -320,11 +337,14 @@ def model_function(drive, names, output: str, scenario=None) -> ScenarioMetric:
     scenario : Scenario, str or os.PathLike, optional
         A scenario, a built-in scenario name or a scenario file; default the built-in
         scenario producing ``output`` (`METRIC_SCENARIOS`).
+    evaluator : {"auto", "dynamic", "quasistatic"}
+        `hdsim.scenarios.evaluator`; "auto" decides once, on the nominal drive.
 
     Returns
     -------
     ScenarioMetric
         Picklable ``f(X: (n, d)) -> (n,)``; NaN for rows that cannot be built or solved.
+        Its ``choice`` says which evaluator runs and why.
 
     Raises
     ------
@@ -338,8 +358,10 @@ def model_function(drive, names, output: str, scenario=None) -> ScenarioMetric:
         scenario = METRIC_SCENARIOS[output]
     resolved = load_scenario(scenario)  # fails early with a clear message
     model = _single(drive)
+    choice = choose_evaluator(get_setup(resolved.setup), model, resolved, evaluator)
     if not (isinstance(scenario, str) and METRIC_SCENARIOS.get(output) == scenario):
         _check_output(model, resolved, output)
     # a unit given by name travels by name: workers load it from their own cache
     return ScenarioMetric(drive if isinstance(drive, str) else model,
-                          tuple(resolve_names(model, names)), output, resolved)
+                          tuple(resolve_names(model, names)), output, resolved,
+                          evaluator=choice.chosen, choice=choice.as_dict())

@@ -74,7 +74,8 @@ class SimulationResult:
     @property
     def batch(self) -> int:
         """Number of runs M in the batch."""
-        return next(iter(self.states.values())).shape[0]
+        # a quasi-static run has signals but no ODE states
+        return next(iter({**self.signals, **self.states}.values())).shape[0]
 
     def signal(self, name: str, sample: int = 0) -> np.ndarray:
         """One time series of sample ``sample`` (state or output signal)."""

@@ -419,6 +419,13 @@ class DahlSlip(Friction):
         return tuple(fr.dahl_slip_rates(states, body_rate, spring_tangent, spring_torque, torque, reach,
                                         stiffness, 0.02 * reach, self.velocity_scale))
 
+    def compiled(self, size, c_struct, c_mesh):
+        if not self.keeps_law_of(DahlSlip, _LAW + ("_law",)) or self.substeps != 8:
+            return None
+        from hdsim.model.effects import kernels
+        torque, reach, stiffness = self._law(None)
+        return (kernels.dahl_slip_step,), parameter_rows(size, torque[0], reach[0], stiffness[0], 0.02 * reach[0])
+
     def free_parameters(self, context: FitContext):
         t = context.max_torque
         return (FreeParameter("slip_torque", 0.0, np.inf, 0.3 * t),

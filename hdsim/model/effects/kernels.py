@@ -3,7 +3,7 @@
 Optional: this module needs numba (``pip install "hdsim[fast]"``); the effects import it
 only when asked for their compiled form (`Effect.compiled`), and the evaluator falls back
 to its numpy form when numba is missing or a law has none (a law defined outside the
-package, the Dahl micro-slip slider). Each function is the scalar twin of the numpy
+package). Each function is the scalar twin of the numpy
 law it names, for one parameter set (one row of a batch); the evaluator's tests check
 each pair against each other.
 
@@ -143,6 +143,38 @@ def _relays_on_branch(s0, torque, d, nudge, p, out):
             out[i] = s0[i]
         total += out[i]
     return total, slope
+
+
+@njit(_F8(_F8, _F8, _F8, _F8, _ROW), cache=True, error_model="numpy")
+def _slider_share(s, u, k, d, p):
+    """dslip/dtwist of a Dahl slider with rounded stops in series with a spring of tangent
+    k carrying u, the body moving in direction d: the scalar `hdsim.physics.friction.dahl_slip_rates`
+    for one slider (its tanh sign is exactly ±1 at a unit rate); p = (F, s_max, σ, width)."""
+    F, reach, sigma, width = p[0], p[1], p[2], p[3]
+    stop = sigma * (_softplus(s - reach, width) - _softplus(-s - reach, width))
+    stick = sigma * max(1.0 - (u - stop) / F * d, 0.0)
+    contact = 1.0 + 0.5 * (math.tanh(0.5 * (s - reach) / width) + math.tanh(0.5 * (-s - reach) / width))
+    slider = 1.0 / max(stick + sigma * contact, 1e-9 * sigma)
+    return slider / (1.0 / max(k, 1e-300) + slider)
+
+
+@njit(FRICTION_STEP, cache=True, error_model="numpy")
+def dahl_slip_step(spring, ph, s0, e0, e, d, p, out):
+    """The Dahl micro-slip slider in series with the spring (`hdsim.model.effects.friction.DahlSlip`):
+    the generic `Friction.advance` (8 midpoint sub-steps of dslip/dtwist) and path tangent
+    ``k (1 − dslip/dtwist)`` at the end; p = (F, s_max, σ, stop width)."""
+    direction = 1.0 if e >= e0 else -1.0
+    h = (e - e0) / 8.0
+    s, x = s0[0], e0
+    for _ in range(8):
+        u, k = spring(x - s, ph)
+        k1 = _slider_share(s, u, k, direction, p)
+        u, k = spring(x + 0.5 * h - (s + 0.5 * h * k1), ph)
+        s += h * _slider_share(s + 0.5 * h * k1, u, k, direction, p)
+        x += h
+    out[0] = s
+    u, k = spring(e - s, ph)
+    return u, k * (1.0 - _slider_share(s, u, k, d, p)), u, k
 
 
 @njit(FRICTION_STEP, cache=True, error_model="numpy")
