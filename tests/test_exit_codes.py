@@ -99,3 +99,31 @@ def test_a_full_or_read_only_disk_met_while_writing_is_bad_input_other_os_errors
     got, _, err = cli("simulate", "lost_motion", "--out", str(tmp_path / "out"))
     assert got == code and len(err.strip().splitlines()) == 1
     assert ("internal error" in err) == (code == 1)
+
+
+def test_a_disk_that_fills_during_a_study_keeps_the_finished_rows_and_says_how_to_resume(tmp_path, cli,
+                                                                                         monkeypatch):
+    from hdsim.sensitivity import store as study_store
+
+    out = tmp_path / "study.h5"
+    args = ["sobol", "--function", "ishigami", "--n", "64", "--workers", "1", "--chunksize", "64",
+            "--out", out]
+    written, write = [], study_store.H5Store.write
+
+    def fills_after_two_chunks(self, rows, y, key, errors):
+        if len(written) == 2:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        written.append(len(rows))
+        return write(self, rows, y, key, errors)
+
+    monkeypatch.setattr(study_store.H5Store, "write", fills_after_two_chunks)
+    code, _, err = cli(*args)
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "No space left on device" in err and "kept" in err and "--resume" in err
+    monkeypatch.setattr(study_store.H5Store, "write", write)
+    code, out_text, err = cli(*args, "--resume", "--json")
+    assert code == 0, err
+    import json
+
+    summary = json.loads(out_text)
+    assert summary["reused"] == sum(written) == 128 and summary["evaluations"] == 64 * 5

@@ -43,3 +43,19 @@ def test_a_chunk_cancelled_again_and_again_stops_the_study_with_a_message():
     X = np.random.default_rng(0).uniform(-np.pi, np.pi, (40, 3))
     with pytest.raises(RuntimeError, match="cancelled the chunk of rows 16-23 4 times"):
         evaluate(Ishigami(), X, CancellingExecutor(X, row=16, times=10), chunksize=8, progress=False)
+
+
+def test_a_log_without_a_terminal_gets_a_line_per_chunk_with_the_time_left():
+    import io
+
+    from hdsim.sensitivity.evaluate import LogProgress
+
+    ticks = iter([0.0, 2.0, 4.0, 30.0, 31.0])  # start, then one clock reading per chunk
+    log = io.StringIO()
+    progress = LogProgress(400, every=10.0, stream=log, clock=lambda: next(ticks))
+    for _ in range(4):
+        progress.update(100)
+    lines = log.getvalue().splitlines()
+    # 2 s and 4 s: under the 10 s spacing, silent; 30 s: a line; the last chunk: always
+    assert lines == ["sobol: 300/400 runs (75 %), 30 s elapsed, about 10 s left",
+                     "sobol: 400/400 runs (100 %), 31 s elapsed, about 0 s left"]

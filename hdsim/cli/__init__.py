@@ -85,7 +85,7 @@ def main(argv=None) -> int:
     except OSError as exc:
         # a folder without permission, a read-only or full disk: the machine the user must
         # fix, said in one line (exit 2); any other OSError is the program's failure (below)
-        if debug or not _environment(exc):
+        if debug or not environment_error(exc):
             if debug:
                 raise
             return _internal_error(args.verb, exc)
@@ -113,7 +113,7 @@ def _internal_error(verb: str, exc: BaseException) -> int:
 _ENVIRONMENT = {errno.EACCES, errno.EPERM, errno.EROFS, errno.ENOSPC, errno.EDQUOT}
 
 
-def _environment(exc: OSError) -> bool:
+def environment_error(exc: OSError) -> bool:
     """True for an OSError of the machine (permission, read-only, full disk), h5py's included
     (it reports the errno in its message)."""
     if exc.errno in _ENVIRONMENT:

@@ -83,12 +83,23 @@ def run(args) -> int:
     # a broken model is ModelError (bad input, exit 2); anything else that fails here, a
     # broken process pool included, is the program's failure and reaches main (exit 1)
     func, problem, output, model, analytic = _resolve(args, models)
-    with open_executor(args.executor, workers) as executor:
-        result = run_study(func, problem, n, seed=seed, second_order=args.second_order,
-                           replicates=reps, executor=executor, workers=workers,
-                           chunksize=chunksize, out=args.out, resume=args.resume,
-                           retry_failed=args.retry_failed, target_width=target,
-                           model=model)
+    try:
+        with open_executor(args.executor, workers) as executor:
+            result = run_study(func, problem, n, seed=seed, second_order=args.second_order,
+                               replicates=reps, executor=executor, workers=workers,
+                               chunksize=chunksize, out=args.out, resume=args.resume,
+                               retry_failed=args.retry_failed, target_width=target,
+                               model=model)
+    except OSError as exc:
+        from hdsim.cli import environment_error
+
+        if not (args.out and environment_error(exc)):
+            raise
+        # every chunk is flushed as it finishes, so what was done before the disk filled is
+        # in the study file: say so, and how to go on
+        raise InputError(f"{args.out}: {exc.strerror or exc} while writing the study; the rows finished "
+                         f"before are kept in it: free space (or copy the file elsewhere) and run the same "
+                         f"command with --resume") from None
     summary = result.to_json(output)
     summary["seconds"] = round(time.perf_counter() - t0, 3)
     summary.update(_extras(args, model, analytic, problem.names, result))

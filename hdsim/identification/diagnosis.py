@@ -220,6 +220,11 @@ class TwistTest(TestKind):
 
         return [twist_fit_figure(result, folder)]
 
+    def predictions(self, result):
+        from hdsim.identification.predictions import catalog_predictions
+
+        return catalog_predictions(result)
+
 
 class StiffnessTest(TwistTest):
     """The torsional stiffness / hysteresis test: wave generator locked, circular spline fixed."""

@@ -18,14 +18,15 @@ same effects are switched on.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from hdsim.errors import InputError, SolverError, unknown_name
-from hdsim.identification.optimizer import (FittedRows, bic, check_nested, effective_n, fit_many, residuals,
-                                           uncertainty)
+from hdsim.identification.optimizer import (FittedRows, bic, check_nested, covariance, effective_n, fit_many,
+                                           residuals, uncertainty)
 from hdsim.identification.problem import K0_NAME, Evaluator, FitProblem, make_problem, other_starts
 from hdsim.io.measurement import Measurement
 from hdsim.model import effects as fx
@@ -142,6 +143,9 @@ class FitResult(FittedRows):
         Predicted and measured-minus-predicted angle [rad] at every sample.
     rows : numpy.ndarray
         Boolean mask of the rows the fit minimised (all rows unless a hold-out fit).
+    coordinates : FittedCoordinates or None
+        The fit's own coordinates and their covariance, for propagating its uncertainty;
+        None when the fit has no free parameter or no covariance.
     """
 
     measurement: Measurement
@@ -161,6 +165,7 @@ class FitResult(FittedRows):
     derived: dict = field(default_factory=dict)
     converged: bool = True
     message: str = ""
+    coordinates: "FittedCoordinates | None" = None
 
     @property
     def families(self) -> list[str]:
@@ -324,6 +329,7 @@ def result_of(ev: Evaluator, prob: FitProblem, unit: str = "") -> FitResult:
         model = model.with_effects(kinematic_error=effect)
         updates.update({f"kinematic_error.{k}": v for k, v in linear.items()})
     unc = uncertainty(ev, prob, r_rows[0])
+    coordinates = fitted_coordinates(prob, covariance(prob, r_rows[0]))
     prediction = ev.y - full[0]
     effects = {f: getattr(model, f).id for f in SLOTS if not getattr(model, f).is_null}
     derived = {"K0_Nm_per_rad": float(np.asarray(model.base_stiffness).reshape(-1)[0])}
@@ -336,7 +342,43 @@ def result_of(ev: Evaluator, prob: FitProblem, unit: str = "") -> FitResult:
                      rows=prob.rows.copy(), n_params=len(prob.names) + prob.basis.shape[1],
                      ke_coefficients=linear, iterations=prob.iterations, unit=unit or prob.model.name,
                      internal=internal, derived=derived, converged=prob.message.startswith(("converged", "nothing")),
-                     message=prob.message)
+                     message=prob.message, coordinates=coordinates)
+
+
+@dataclass(frozen=True)
+class FittedCoordinates:
+    """The fit's own coordinates ``u`` (log and logistic transforms of the parameters, which
+    keep every value in its bounds) and their covariance: where the fit's Gaussian
+    approximation is made, so where its uncertainty is propagated from
+    (`hdsim.identification.predictions`).
+
+    Attributes
+    ----------
+    problem : FitProblem
+        The fit's structure, without its record (the map from ``u`` to the model).
+    u : numpy.ndarray
+        The fitted coordinates.
+    covariance : numpy.ndarray
+        Their covariance, widened for a correlated residual (`optimizer.covariance`).
+    """
+
+    problem: FitProblem
+    u: np.ndarray
+    covariance: np.ndarray
+
+    def updates(self, U) -> dict:
+        """Dotted model updates (arrays) for rows of coordinates ``U``."""
+        return self.problem.updates(np.atleast_2d(U))
+
+
+def fitted_coordinates(prob: FitProblem, cov) -> FittedCoordinates | None:
+    """`FittedCoordinates` of a finished problem, None without a covariance or parameters."""
+    if cov is None or not prob.names:
+        return None
+    k = prob.u.size
+    bare = dataclasses.replace(prob, rows=prob.rows[:0], basis=prob.basis[:0], J=None, r=None, twist_at_u=None,
+                               nested=None, extra={})
+    return FittedCoordinates(bare, prob.u.copy(), np.asarray(cov[:k, :k], dtype=float))
 
 
 # --------------------------------------------------------------------------- API

@@ -255,23 +255,28 @@ def effective_n(r: np.ndarray) -> float:
     return max(r.size * (1.0 - rho) / (1.0 + rho), 2.0)
 
 
+def covariance(prob: FitProblem, r: np.ndarray) -> np.ndarray | None:
+    """Covariance of the fitted coordinates ``u`` and the offset (last row and column),
+    ``s² (JᵀJ)⁺`` widened by ``n / n_eff`` for a correlated residual; None without a Jacobian."""
+    if prob.J is None:
+        return None
+    n = r.size
+    ones = np.ones((n, 1))
+    J = np.hstack([prob.J, ones]) if prob.u.size else ones
+    s2 = float(r @ r) / max(n - J.shape[1], 1)
+    try:
+        return np.linalg.pinv(J.T @ J) * s2 * (n / effective_n(r))
+    except np.linalg.LinAlgError:
+        return None
+
+
 def uncertainty(ev: Evaluator, prob: FitProblem, r: np.ndarray) -> dict:
     """1-sigma uncertainties from the Jacobian (offset column included), n_eff-widened."""
     out = {}
-    if prob.J is None:
+    cov = covariance(prob, r)
+    if cov is None:
         return out
-    n = r.size
-    k = prob.u.size
-    ones = np.ones((n, 1))
-    J = np.hstack([prob.J, ones]) if k else ones
-    dof = max(n - J.shape[1], 1)
-    s2 = float(r @ r) / dof
-    try:
-        cov = np.linalg.pinv(J.T @ J) * s2
-    except np.linalg.LinAlgError:
-        return out
-    widen = math.sqrt(n / effective_n(r))
-    sd = np.sqrt(np.maximum(np.diag(cov), 0.0)) * widen
+    sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
     for j, (name, tr) in enumerate(zip(prob.names, prob.transforms)):
         out[name] = float(abs(tr.dphys_du(prob.u[j])) * sd[j])
     out["offset_rad"] = float(sd[-1])

@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from hdsim.atomic import write_text_atomic
+from hdsim.errors import InputError
 from hdsim.io.figures import save_figure
 
 __all__ = ["Page", "new_figure", "save", "step_label", "diagnosis_page", "wrong_test_page", "rounded", "provenance", "fit_page"]
@@ -181,15 +182,47 @@ def _summary_box(page: Page, d: dict, kind) -> None:
     page.table(("summary", ""), rows)
 
 
-def _parameters(page: Page, fitted: dict) -> None:
+def _parameters(page: Page, fitted: dict, model=None) -> None:
     """The fitted values (a fit's JSON: ``params`` or ``fitted``, and ``uncertainty``) rounded
-    to their uncertainty."""
+    to their uncertainty, with each one's unit where ``model`` (the fitted one) knows it."""
     values = fitted.get("params") or fitted.get("fitted") or {}
     sigma = fitted.get("uncertainty") or {}
-    rows = [(name, rounded(float(v), sigma.get(name))) for name, v in values.items()]
+    rows = [(name, rounded(float(v), sigma.get(name)), _unit_of(model, name)) for name, v in values.items()]
     if rows:
-        page.heading("Fitted parameters (SI; torques of a torque test on the wave-generator shaft)")
-        page.table(("parameter", "value ± standard uncertainty"), rows)
+        page.heading("Fitted parameters (torques of a torque test on the wave-generator shaft)")
+        page.table(("parameter", "value ± standard uncertainty", "unit"), rows)
+
+
+def _unit_of(model, name: str) -> str:
+    """The unit of a dotted parameter of ``model``; "" where it has no such parameter."""
+    try:
+        return model.param_info(name).get("unit", "")
+    except (AttributeError, InputError):
+        return ""
+
+
+def _predictions(page: Page, kind, fit) -> None:
+    """What the fitted drive predicts for the maker's tests, with 95 % bands
+    (`TestKind.predictions`); nothing for a kind without them."""
+    predictions = kind.predictions(fit) if fit is not None else []
+    if not predictions:
+        return
+    rows = []
+    for p in predictions:
+        banded = math.isfinite(p.low) and math.isfinite(p.high) and p.high > p.low
+        # every number of a row to the band's second significant digit: no digit the fit
+        # does not determine
+        digits = 1 - int(math.floor(math.log10((p.high - p.low) / 2))) if banded else None
+
+        def shown(x, d=digits):
+            return f"{x:.4g}" if d is None else f"{round(x, d):.{max(d, 0)}f}"
+
+        rows.append((p.label, f"{shown(p.value)} {p.unit}", f"{shown(p.low)} – {shown(p.high)}" if banded else "—",
+                     "—" if p.datasheet is None else f"{p.datasheet:.6g}", p.method))
+    page.heading("What the fitted drive predicts")
+    page.text("The fitted drive put through the maker's tests (±4 % T_N lost motion; the ±T_N stiffness test), "
+              "each with a 95 % band propagated from the fit's covariance.")
+    page.table(("test", "fitted drive", "95 % band", "datasheet", "band by"), rows)
 
 
 def _top(page: Page, summary: dict) -> Page:
@@ -379,7 +412,8 @@ def diagnosis_page(diagnosis, folder, summary: dict, scale_numbers) -> Path:
         page.text("Final model:").bullets(d["findings"]["final"])
     w = d["whiteness"]
     page.text(f"Ljung–Box Q = {w['ljung_box_q']:.1f}, p = {w['p_value']:.3g}." if "ljung_box_q" in w else "")
-    _parameters(page, d.get("final") or {})
+    _parameters(page, d.get("final") or {}, getattr(diagnosis.final.fit, "model", None))
+    _predictions(page, kind, diagnosis.final.fit)
     for heading, head_rows in kind.report_sections(diagnosis, d):
         page.heading(heading).table(*head_rows)
     figures = _common_figures(diagnosis, folder, unit, scale)
@@ -410,7 +444,8 @@ def fit_page(result, folder, summary: dict, kind, scale_numbers=None) -> Path:
     checks = [(c["status"], c["check"], c["message"]) for c in summary.get("checks", [])]
     if checks:
         page.heading("The data").table(CHECK_HEAD, checks)
-    _parameters(page, summary)
+    _parameters(page, summary, getattr(result, "model", None))
+    _predictions(page, kind, result)
     figures = [_residual_vs_time(meas, [("+".join(result.families) or "base", result)], folder, unit, scale)]
     figures += kind.fit_figures(result, folder, scale_numbers)
     page.heading("Figures")

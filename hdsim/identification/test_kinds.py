@@ -188,6 +188,11 @@ class TestKind:
         """The kind's tables of a diagnosis report: [(heading, (head, rows))]."""
         return []
 
+    def predictions(self, result) -> list:
+        """What the fitted drive predicts for the maker's tests, each with a 95 % band
+        (`hdsim.identification.predictions.Prediction`), for the report pages; none here."""
+        return []
+
     def write_report(self, diagnosis, directory, summary: dict, scale):
         """Write the report page of ``diagnosis`` into ``directory`` (``summary``: its JSON;
         ``scale``: the drive's datasheet numbers); returns the page's path."""

@@ -162,7 +162,7 @@ def run_checks(meas, drive: DriveScale) -> tuple[list[Check], dict]:
                             "loading and unloading are told apart on the smoothed torque"))
     else:
         checks.append(Check("torque_noise", "ok", f"torque noise {torque_noise:.3g} N·m rms, "
-                            f"{100 * torque_noise / swing:.1f} % of its swing"))
+                            f"{100 * torque_noise / swing:.2g} % of its swing"))
     if not ke:
         cycles = reversals / 2.0
         status = "ok" if reversals >= 2 else "warn"

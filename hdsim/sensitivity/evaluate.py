@@ -363,8 +363,42 @@ def _abort_if_all_failed(out, rows):
 
 
 def _progress(total, enabled):
+    """A progress bar on a terminal, log lines elsewhere (a batch job's log, CI, a pipe)."""
     from tqdm import tqdm
 
-    # disable=None hides the bar when stderr is not a terminal (logs, CI, pipes).
-    return tqdm(total=total, file=sys.stderr, unit="run", desc="sobol",
-                disable=None if enabled else True, dynamic_ncols=True)
+    if enabled and not sys.stderr.isatty():
+        return LogProgress(total)
+    return tqdm(total=total, file=sys.stderr, unit="run", desc="sobol", disable=not enabled,
+                dynamic_ncols=True)
+
+
+class LogProgress:
+    """Progress for a log without a terminal: a line per finished chunk, with the time left.
+
+    A bar redrawn with carriage returns is unreadable in a log file, and a silent study
+    of an hour looks hung. Lines come at most every ``every`` seconds (a study of many
+    small chunks would otherwise flood its log), and always for the last chunk; the time
+    left is the rows left at the mean rate so far.
+    """
+
+    def __init__(self, total: int, every: float = 10.0, stream=None, clock=None):
+        import time
+
+        self.total, self.done, self.every = int(total), 0, float(every)
+        self.stream = stream or sys.stderr
+        self.clock = clock or time.monotonic
+        self.start = self.last = self.clock()
+
+    def update(self, n: int) -> None:
+        self.done += int(n)
+        now = self.clock()
+        if now - self.last < self.every and self.done < self.total:
+            return
+        self.last = now
+        elapsed = now - self.start
+        left = elapsed / self.done * (self.total - self.done) if self.done else float("nan")
+        print(f"sobol: {self.done}/{self.total} runs ({100.0 * self.done / max(self.total, 1):.0f} %), "
+              f"{elapsed:.0f} s elapsed, about {left:.0f} s left", file=self.stream, flush=True)
+
+    def close(self) -> None:
+        """Nothing to tear down (the tqdm bar's interface)."""

@@ -1,0 +1,152 @@
+"""What a fitted drive predicts for the catalog tests, with a 95 % band from the fit.
+
+A fit on a bench record gives a drive (`hdsim.identification.fit.FitResult.model`) and the
+covariance of its own coordinates ``u`` (``coordinates``: the fitted parameters through
+log and logistic transforms, where the fit's Gaussian approximation is made and every
+value stays in its bounds). Here that drive is put through the maker's tests: the
+±4 % T_N lost-motion test and the ±T_N stiffness test (K1, K2, K3, torsion at T_N,
+hysteresis loss). Each prediction carries a 95 % band propagated from the covariance Σ:
+
+*linearised* (the default)
+    Each coordinate is moved by ±1 standard deviation, the metrics are read by central
+    differences ``g``, and the band is ``±1.96 √(g Σ gᵀ)``.
+*sampled*
+    Where the linearisation does not hold (a metric's second difference is more than a
+    fifth of its first for some coordinate), 200 draws of ``u`` from ``N(u, Σ)``: the band
+    is the 2.5–97.5 % quantiles of the metric.
+
+Every set of parameters of one test runs as one batch (`hdsim.scenarios.run.run_scenario`
+on a batch model) through the quasi-static evaluator: the drive was identified by
+quasi-static fits (`hdsim.simulation.quasistatic`), so its parameters mean what that
+model says, and the dynamic model would add the bench's output inertia, which no fit
+determined (it moves K1 and the hysteresis loss by 1–2 %, docs/sensitivity.md §11). A
+report pays milliseconds for it. docs/tutorial-find-missing-effect.md, "What the
+fitted drive predicts", shows the table.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hdsim.errors import InputError, SolverError
+
+#: the catalog tests and the metrics read from each: (scenario, metric, label, unit, scale)
+CATALOG_TESTS = (
+    ("lost_motion", "lost_motion_arcmin", "lost motion, ±4 % T_N", "arcmin", 1.0),
+    ("stiffness", "K1_Nm_per_rad", "K1", "N·m/rad", 1.0),
+    ("stiffness", "K2_Nm_per_rad", "K2", "N·m/rad", 1.0),
+    ("stiffness", "K3_Nm_per_rad", "K3", "N·m/rad", 1.0),
+    ("stiffness", "torsion_at_rated_arcmin", "torsion at T_N", "arcmin", 1.0),
+    ("stiffness", "hysteresis_loss_arcmin", "hysteresis loss", "arcmin", 1.0),
+)
+#: datasheet figures a built-in unit's catalog entry gives, by metric
+DATASHEET_KEYS = {"K1_Nm_per_rad": "K1", "K2_Nm_per_rad": "K2", "K3_Nm_per_rad": "K3"}
+#: z of a two-sided 95 % band
+Z95 = 1.959964
+#: draws of the sampled band
+SAMPLES = 200
+#: the linearisation is trusted while |second difference| <= this × |first difference|
+NONLINEARITY = 0.2
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """One catalog metric of the fitted drive.
+
+    Attributes
+    ----------
+    label, unit : str
+        What it is, and its unit.
+    value : float
+        The fitted drive's value.
+    low, high : float
+        The 95 % band (NaN when the fit gives no covariance).
+    datasheet : float or None
+        The catalog's figure for the unit, where it gives one.
+    method : str
+        ``"linearised"``, ``"sampled (N of 200 draws)"`` or ``"no covariance"``.
+    """
+
+    label: str
+    unit: str
+    value: float
+    low: float
+    high: float
+    datasheet: float | None
+    method: str
+
+
+def catalog_predictions(result, *, samples: int = SAMPLES, seed: int = 0) -> list[Prediction]:
+    """The catalog tests of ``result``'s fitted drive, each with its 95 % band.
+
+    Parameters
+    ----------
+    result : hdsim.identification.fit.FitResult
+        A fit of a twist test (stiffness or kinematic error).
+    samples : int
+        Draws of the sampled band, where the linearisation does not hold.
+    seed : int
+        Seed of the draws.
+
+    Returns
+    -------
+    list of Prediction
+        In the order of `CATALOG_TESTS`; a test the drive cannot run is left out.
+    """
+    model, coordinates = result.model, result.coordinates
+    catalog = model.provenance.get("catalog") or {}
+    if coordinates is None:
+        rows, sd = None, np.zeros(0)
+    else:
+        sd = np.sqrt(np.maximum(np.diag(coordinates.covariance), 0.0))
+        rows = np.vstack([coordinates.u, coordinates.u + np.diag(sd), coordinates.u - np.diag(sd)])
+    k = sd.size
+    out = []
+    for scenario in dict.fromkeys(test[0] for test in CATALOG_TESTS):
+        wanted = [t for t in CATALOG_TESTS if t[0] == scenario]
+        values = _metrics(model, coordinates, rows, scenario, [t[1] for t in wanted])
+        if values is None:
+            continue
+        for (_, metric, label, unit, scale), v in zip(wanted, values):
+            centre = float(v[0])
+            datasheet = catalog.get(DATASHEET_KEYS.get(metric, ""))
+            if not k or not np.all(np.isfinite(v)):
+                out.append(Prediction(label, unit, centre * scale, np.nan, np.nan, datasheet, "no covariance"))
+                continue
+            first = (v[1:k + 1] - v[k + 1:]) / 2.0
+            second = v[1:k + 1] + v[k + 1:] - 2.0 * centre
+            if np.all(np.abs(second) <= NONLINEARITY * np.abs(first) + 1e-12 * abs(centre)):
+                g = first / np.where(sd > 0, sd, 1.0)
+                half = Z95 * float(np.sqrt(max(g @ coordinates.covariance @ g, 0.0)))
+                out.append(Prediction(label, unit, centre * scale, (centre - half) * scale, (centre + half) * scale,
+                                      datasheet, "linearised"))
+                continue
+            draws = np.random.default_rng(seed).multivariate_normal(coordinates.u, coordinates.covariance,
+                                                                   size=samples, method="eigh")
+            sampled = _metrics(model, coordinates, draws, scenario, [metric])
+            kept = sampled[0][np.isfinite(sampled[0])] if sampled is not None else np.zeros(0)
+            if kept.size < samples // 2:
+                out.append(Prediction(label, unit, centre * scale, np.nan, np.nan, datasheet,
+                                      f"sampled ({kept.size} of {samples} draws ran: no band)"))
+                continue
+            low, high = np.quantile(kept, [0.025, 0.975])
+            out.append(Prediction(label, unit, centre * scale, low * scale, high * scale, datasheet,
+                                  f"sampled ({kept.size} of {samples} draws)"))
+    return out
+
+
+def _metrics(model, coordinates, rows, scenario, metrics):
+    """The metrics of ``scenario`` for each row of coordinates (one batched run; the fitted
+    drive alone without rows): arrays in the order of ``metrics``; None when the drive
+    cannot run the scenario."""
+    from hdsim.scenarios.run import run_scenario
+
+    batch = model if rows is None else model.with_updates(coordinates.updates(rows))
+    try:
+        run = run_scenario(batch, scenario, evaluator="quasistatic")
+    except (InputError, SolverError):
+        return None
+    size = 1 if rows is None else len(rows)
+    return [np.broadcast_to(np.asarray(run.metrics[m], dtype=float).reshape(-1), (size,)) for m in metrics]

@@ -1,0 +1,61 @@
+"""What a fitted drive predicts for the catalog tests, against closed forms.
+
+A plain linear spring: the fit has one free parameter, the stiffness K0, with its
+standard uncertainty σ_K from the fit. Its ±4 % lost motion is ``0.08 T_N / K0`` (no gap,
+no friction), so the linearised 95 % band is ``±1.96 · LM · σ_K / K0`` to first order, and
+its K1 is K0 with the band ``±1.96 σ_K``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hdsim.identification.fit import fit
+from hdsim.identification.predictions import Z95, catalog_predictions
+from hdsim.io.measurement import Measurement
+from hdsim.model.catalog import load_unit
+from hdsim.units import rad_to_arcmin
+
+K, RATED, NOISE = 31_000.0, 87.0, 2e-6
+
+
+@pytest.fixture(scope="module")
+def spring_fit():
+    t = np.linspace(0.0, 40.0, 2000)
+    torque = RATED * np.sin(2 * np.pi * t / 20.0)
+    angle = torque / K + np.random.default_rng(3).normal(0.0, NOISE, t.size)
+    meas = Measurement(test="stiffness", time=t, torque=torque, angle=angle)
+    return fit(meas, [], unit=load_unit("CSG-25-100").with_effects(
+        hardening=_none("hardening"), backlash=_none("backlash"), friction=_none("friction"),
+        damping=_none("damping")))
+
+
+def _none(family):
+    from hdsim.model import effects as fx
+
+    return fx.NO_EFFECT[family]
+
+
+def test_a_linear_spring_predicts_its_lost_motion_and_k1_with_the_closed_form_band(spring_fit):
+    K0 = float(spring_fit.derived["K0_Nm_per_rad"])
+    sigma = spring_fit.uncertainty["stiffness.K0"]
+    assert K0 == pytest.approx(K, rel=1e-3) and 0 < sigma < 1e-2 * K0
+    predictions = {p.label: p for p in catalog_predictions(spring_fit)}
+    lost = predictions["lost motion, ±4 % T_N"]
+    expected = rad_to_arcmin(0.08 * RATED / K0)
+    assert lost.value == pytest.approx(expected, rel=1e-3) and lost.method == "linearised"
+    half = Z95 * expected * sigma / K0
+    assert (lost.high - lost.low) / 2 == pytest.approx(half, rel=0.02)
+    k1 = predictions["K1"]
+    assert k1.value == pytest.approx(K0, rel=1e-3) and k1.datasheet == 31_000.0
+    assert (k1.high - k1.low) / 2 == pytest.approx(Z95 * sigma, rel=0.02)
+
+
+def test_a_report_page_shows_the_predictions(spring_fit, tmp_path):
+    from hdsim.identification.diagnosis import StiffnessTest
+    from hdsim.identification.report_page import fit_page
+
+    page = fit_page(spring_fit, tmp_path, spring_fit.summary(), StiffnessTest())
+    text = page.read_text()
+    assert "What the fitted drive predicts" in text and "95 % band" in text and "lost motion, ±4 % T_N" in text
