@@ -4,6 +4,7 @@ plot of a record with one loading rate)."""
 
 from __future__ import annotations
 
+import numpy as np
 import truth
 from hdsim.identification.diagnosis import diagnose
 from hdsim.io.measurement import make_measurement
@@ -48,6 +49,19 @@ def test_the_page_says_how_to_reproduce_it_and_rounds_values_to_their_uncertaint
     md = (tmp_path / "rep" / "index.md").read_text()
     assert hashlib.sha256((tmp_path / "bench.csv").read_bytes()).hexdigest() in md
     assert "| hdsim |" in md and "Fitted parameters" in md and " ± " in md
+    # the noise floor is the record's (the data checks'): the baseline's and the final
+    # model's findings name that one number
+    from hdsim.signals import noise_level
+    from hdsim.units import ARCSEC_PER_RAD
+
+    from hdsim.identification.residuals import findings
+
+    meas = load_measurement(tmp_path / "bench.csv")
+    floor = f"{noise_level(meas.angle) * ARCSEC_PER_RAD:.1f} arcsec"
+    rng = np.random.default_rng(0)
+    for residual in (rng.normal(0, 1e-6, len(meas)), rng.normal(0, 5e-6, len(meas))):  # two models' residuals
+        assert findings(meas, residual)[0].endswith(f"noise floor of {floor}")
+    assert result.to_json()["findings"]["baseline"][0].endswith(floor)
 
 
 def test_a_decision_says_how_an_error_changed_in_words():

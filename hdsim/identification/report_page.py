@@ -182,14 +182,14 @@ def _summary_box(page: Page, d: dict, kind) -> None:
     page.table(("summary", ""), rows)
 
 
-def _parameters(page: Page, fitted: dict, model=None) -> None:
+def _parameters(page: Page, fitted: dict, model=None, torque_test: bool = False) -> None:
     """The fitted values (a fit's JSON: ``params`` or ``fitted``, and ``uncertainty``) rounded
     to their uncertainty, with each one's unit where ``model`` (the fitted one) knows it."""
     values = fitted.get("params") or fitted.get("fitted") or {}
     sigma = fitted.get("uncertainty") or {}
     rows = [(name, rounded(float(v), sigma.get(name)), _unit_of(model, name)) for name, v in values.items()]
     if rows:
-        page.heading("Fitted parameters (torques of a torque test on the wave-generator shaft)")
+        page.heading("Fitted parameters" + (" (torques on the wave-generator shaft)" if torque_test else ""))
         page.table(("parameter", "value ± standard uncertainty", "unit"), rows)
 
 
@@ -280,12 +280,17 @@ def _round_rows(kind, step, scale: float, by_share: bool) -> list:
         if c.fit is None:  # could not be fitted: the reason says why
             rows.append([label, c.effect, "–", "–", "–"] + (["–"] if by_share else []) + [c.reason])
             continue
-        gain = ", ".join(f"{100 * g:.0f} %" for g in c.holdout_gain)
+        gain = ", ".join(_percent(g) for g in c.holdout_gain)
         if "pooled_holdout_gain" in c.figures:
-            gain = f"{100 * c.figures['pooled_holdout_gain']:.0f} % ({gain})"
+            gain = f"{_percent(c.figures['pooled_holdout_gain'])} ({gain})"
         rows.append([label, c.effect, f"{c.score:.1f}", _number(kind.fit_errors(c.fit)[kind.error_key], scale),
-                     gain] + ([f"{100 * c.share:.0f} %"] if by_share else []) + [c.reason])
+                     gain] + ([_percent(c.share)] if by_share else []) + [c.reason])
     return rows
+
+
+def _percent(fraction: float) -> str:
+    """A fraction as a whole percentage; a value that rounds to zero is "0 %", never "-0 %"."""
+    return f"{round(100 * fraction) + 0:.0f} %"
 
 
 def _ambiguity_text(a: dict) -> str:
@@ -412,7 +417,7 @@ def diagnosis_page(diagnosis, folder, summary: dict, scale_numbers) -> Path:
         page.text("Final model:").bullets(d["findings"]["final"])
     w = d["whiteness"]
     page.text(f"Ljung–Box Q = {w['ljung_box_q']:.1f}, p = {w['p_value']:.3g}." if "ljung_box_q" in w else "")
-    _parameters(page, d.get("final") or {}, getattr(diagnosis.final.fit, "model", None))
+    _parameters(page, d.get("final") or {}, getattr(diagnosis.final.fit, "model", None), unit == "N·m")
     _predictions(page, kind, diagnosis.final.fit)
     for heading, head_rows in kind.report_sections(diagnosis, d):
         page.heading(heading).table(*head_rows)
@@ -444,7 +449,7 @@ def fit_page(result, folder, summary: dict, kind, scale_numbers=None) -> Path:
     checks = [(c["status"], c["check"], c["message"]) for c in summary.get("checks", [])]
     if checks:
         page.heading("The data").table(CHECK_HEAD, checks)
-    _parameters(page, summary, getattr(result, "model", None))
+    _parameters(page, summary, getattr(result, "model", None), unit == "N·m")
     _predictions(page, kind, result)
     figures = [_residual_vs_time(meas, [("+".join(result.families) or "base", result)], folder, unit, scale)]
     figures += kind.fit_figures(result, folder, scale_numbers)

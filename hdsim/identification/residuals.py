@@ -27,7 +27,7 @@ import numpy as np
 # the χ² tail from scipy.special: scipy.stats would add 0.8 s to every `hdsim diagnose`
 from scipy.special import chdtrc
 
-from hdsim.signals import loading_direction
+from hdsim.signals import loading_direction, noise_level
 from hdsim.units import ARCMIN_PER_RAD, ARCSEC_PER_RAD
 
 __all__ = ["ljung_box", "noise_floor", "whiteness", "views", "findings", "order_spectrum",
@@ -200,7 +200,9 @@ def findings(meas, residual, max_items: int = 5) -> list[str]:
     Tmax = max(float(np.max(np.abs(T))), 1e-12)
     rms = float(np.sqrt(np.mean(r * r)))
     out: list[tuple[float, str]] = []
-    floor = noise_floor(r)
+    # the data's noise floor, the one the data checks and the report's summary give: a
+    # property of the record, not of the model whose residual this is
+    floor = noise_level(meas.kinematic_error if meas.test == "kinematic_error" else meas.angle)
 
     def arcmin(x):
         return f"{abs(x) * ARCMIN_PER_RAD:.2f} arcmin"

@@ -341,7 +341,7 @@ def import_checks(meas) -> list[Check]:
         share = rows.dropped_rows / max(total, 1)
         out.append(Check("dropped_rows", "warn" if share > 0.05 else "ok",
                          f"{rows.dropped_rows} of {total} rows dropped for a NaN or empty cell "
-                         f"({100 * share:.1f} %)"))
+                         f"({100 * share:.2g} %)"))
     if rows.windowed_rows:
         out.append(Check("window", "ok", f"{rows.windowed_rows} rows outside the time window left out"))
     if rows.runs > 1:
