@@ -25,6 +25,7 @@ from hdsim.identification import diagnosis as _builtin_kinds  # noqa: F401  (reg
 from hdsim.identification.outcome import assess
 from hdsim.identification.test_kinds import TestKind, test_kind
 from hdsim.io.data_checks import DriveScale, import_checks, wrong_test
+from hdsim.io.decimation import thin_record
 from hdsim.io.measurement import Measurement
 from hdsim.model.catalog import load_unit
 
@@ -36,9 +37,10 @@ def examine(meas: Measurement, scale: DriveScale) -> tuple[list, dict, str]:
     """Every check of a record before a fit: (checks, data summary, wrong-test sentence or '').
 
     The checks are the import's (`hdsim.io.data_checks.import_checks`), what the kind's
-    `TestKind.prepare` changed, and the record's test kind's (`TestKind.checks`). The data
-    summary holds ``rows``, ``dropped_rows`` and the kind's figures (noise floors,
-    reversals, loading rates, speeds …).
+    `TestKind.prepare` changed, the thinning of a long log (`hdsim.io.decimation`), and
+    the record's test kind's (`TestKind.checks`). The data summary holds ``rows`` (those
+    fitted), ``dropped_rows``, ``logged_rows`` for a thinned log, and the kind's figures
+    (noise floors, reversals, loading rates, speeds …).
     """
     return _examine(meas, scale)[1:]
 
@@ -48,9 +50,14 @@ def _examine(meas: Measurement, scale: DriveScale) -> tuple:
     the record the kind prepared, so that what is fitted is prepared once."""
     kind = test_kind(meas.test)
     meas, turned = kind.prepare(meas)
+    imported = import_checks(meas)
+    logged = len(meas)
+    meas, thinned = thin_record(meas)  # a long log: every k-th row, where the noise allows
     checks, figures = kind.checks(meas, scale)
-    checks = import_checks(meas) + list(turned) + list(checks)
+    checks = imported + list(turned) + thinned + list(checks)
     data = {"rows": len(meas), "dropped_rows": meas.rows.dropped_rows, **figures}
+    if thinned:
+        data["logged_rows"] = logged
     return meas, checks, data, wrong_test(checks)
 
 
