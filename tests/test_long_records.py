@@ -62,3 +62,68 @@ def test_the_same_test_at_two_sampling_rates_gives_one_answer_at_the_noise(rows)
     assert bool(thinned) == (rows > MAX_ROWS)
     if thinned:
         assert result.data["logged_rows"] == rows and "one row in 16 is used" in thinned[0]["message"]
+
+
+# --------------------------------------------------------------------------- reading long CSV logs
+
+
+def _csv(path, t, torque, angle, extra_lines=()):
+    rows = [f"{float(a)!r},{float(b)!r},{float(c)!r}" for a, b, c in zip(t, torque, angle)]
+    for at, line in extra_lines:
+        rows.insert(at, line)
+    path.write_text("# test: stiffness\n# note: bench 3 at 20 °C\ntime_s,torque_Nm,angle_rad\n" + "\n".join(rows) + "\n")
+    return path
+
+
+@pytest.fixture
+def numeric_parser(monkeypatch):
+    """The numeric parser for every body (it starts at a million characters otherwise)."""
+    from hdsim.io import measurement_readers
+
+    monkeypatch.setattr(measurement_readers, "FAST_BODY", 0)
+    return measurement_readers
+
+
+def test_the_numeric_parser_reads_what_the_cell_parser_reads(tmp_path, numeric_parser, monkeypatch):
+    t, torque, angle = _spring(2_000)
+    path = _csv(tmp_path / "log.csv", t, torque, angle)
+    parsed = numeric_parser.read_measurement_file(path, None)
+    text = path.read_text()
+    body_at = text.index("angle_rad\n") + len("angle_rad\n")  # after a head with a non-ASCII note
+    fast = numeric_parser._numeric_body(path.read_bytes(), text, body_at, 3)
+    np.testing.assert_array_equal(fast[:, 2], angle)
+    monkeypatch.setattr(numeric_parser, "FAST_BODY", 10**12)  # the cell parser only
+    again = numeric_parser.read_measurement_file(path, None)
+    for name in ("time_s", "torque_Nm", "angle_rad"):
+        np.testing.assert_array_equal(parsed.data[name], again.data[name])
+    np.testing.assert_array_equal(parsed.data["angle_rad"], angle)
+
+
+@pytest.mark.parametrize("bad, message", [
+    ((1500, "1.0,2.0"), "line 1504: 2 cells; expected 3"),  # 3 head lines, then row 1501 is line 1504
+    ((1500, "1.0,x,2.0"), "line 1504, column 'torque_Nm': 'x' is not a number"),
+    ((1500, "#late"), "line 1504: '#' line after the header"),
+])
+def test_a_long_log_with_a_bad_line_is_refused_naming_that_line(tmp_path, numeric_parser, bad, message):
+    from hdsim.errors import InputError
+
+    t, torque, angle = _spring(2_000)
+    path = _csv(tmp_path / "log.csv", t, torque, angle, extra_lines=[bad])
+    with pytest.raises(InputError, match=message):
+        numeric_parser.read_measurement_file(path, None)
+
+
+def test_a_nan_and_a_blank_line_in_a_long_log_keep_their_line_numbers(tmp_path, numeric_parser):
+    from hdsim.errors import InputError
+
+    t, torque, angle = _spring(2_000)
+    time_back = t.copy()
+    time_back[1200] = time_back[1198]  # time stands still at row 1201 (line 1204)
+    path = _csv(tmp_path / "log.csv", time_back, torque, angle, extra_lines=[(10, "")])  # a blank line 14
+    with pytest.raises(InputError, match="line 1205"):  # one line further down after the blank
+        numeric_parser.read_measurement_file(path, None)
+    nan = angle.copy()
+    nan[700] = np.nan
+    path = _csv(tmp_path / "nan.csv", t, torque, nan)
+    with pytest.raises(InputError, match="line 704"):
+        numeric_parser.read_measurement_file(path, None)

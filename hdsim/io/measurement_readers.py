@@ -10,6 +10,7 @@ anything.
 from __future__ import annotations
 
 import csv
+import io
 import os
 from pathlib import Path
 from typing import NamedTuple
@@ -151,20 +152,20 @@ def read_csv(path: str, raw: bytes, columns: dict[str, str] | None,
     except UnicodeDecodeError as exc:
         raise where.fail(f"not a text CSV file (byte {exc.start + 1} is not UTF-8); expected "
                          "'# key: value' lines, a header row and numbers") from None
-    lines = text.split("\n")
     if not text.strip():
         raise where.fail("the file is empty; expected '# test: ...', a header row and at "
                          f"least {MIN_ROWS} rows of numbers")
     meta: dict[str, str] = {}
     origin: dict[str, str] = {}  # key -> 'line N: ' for messages
-    header_at = None
-    for number, line in enumerate(lines, start=1):
+    header_at = header_line = None
+    body_at = len(text)  # where the data rows start (a character offset)
+    for number, (line, body_at) in enumerate(_head_lines(text), start=1):
         line = line.rstrip("\r")
         stripped = line.strip()
         if not stripped:
             continue
         if not stripped.startswith("#"):
-            header_at = number
+            header_at, header_line = number, line
             break
         body = stripped[1:].strip()
         if not body:
@@ -184,13 +185,19 @@ def read_csv(path: str, raw: bytes, columns: dict[str, str] | None,
                          "'time_s,torque_Nm,angle_rad' after the '#' lines")
     keys, origin = _with_options(meta, origin, options)
     test, ratio, rated = interpret_meta(keys, where, origin)
-    header = _header_cells(lines[header_at - 1].rstrip("\r"), header_at, where)
+    header = _header_cells(header_line, header_at, where)
     index = resolve_columns(header, test, columns, where, "column", _optional(options))
 
+    fast = _numeric_body(raw, text, body_at, len(header))
+    if fast is not None:  # a clean numeric table: parsed without a Python string per cell
+        numbers = np.arange(header_at + 1, header_at + 1 + len(fast))
+        data = {si: fast[:, i] * factor for si, (i, factor) in index.items()}
+        return _finish(path, data, numbers, options, test, ratio, rated, meta, header, index)
+    lines = text[body_at:].split("\n")
     rows: list[list[str]] = []
     numbers: list[int] = []
-    for number in range(header_at + 1, len(lines) + 1):
-        line = lines[number - 1].rstrip("\r")
+    for number, line in enumerate(lines, start=header_at + 1):
+        line = line.rstrip("\r")
         if not line.strip():
             continue
         if line.lstrip().startswith("#"):
@@ -207,11 +214,54 @@ def read_csv(path: str, raw: bytes, columns: dict[str, str] | None,
         raise where.fail(f"no data rows after the header; expected at least {MIN_ROWS}")
     data = {si: _column_values(rows, i, header[i], where, options.drop_nan) * factor
             for si, (i, factor) in index.items()}
-    data, report, kept = apply_rows(data, options, where)
-    where = Where(path, lines=[numbers[k] for k in kept])
+    return _finish(path, data, np.asarray(numbers), options, test, ratio, rated, meta, header, index)
+
+
+def _finish(path, data, numbers, options, test, ratio, rated, meta, header, index) -> Parsed:
+    """The import options and the value checks on the parsed columns (``numbers``: the file
+    line of each row, for the messages)."""
+    data, report, kept = apply_rows(data, options, Where(path, lines=numbers))
+    where = Where(path, lines=numbers[kept])
     check_values(data, where, _shown(header, index))
     data = complete_angles(data, test, ratio, where)
     return Parsed(data, test, ratio, rated, {**meta, **options.overrides()}, report)
+
+
+#: a body shorter than this [characters] is parsed cell by cell (about 20,000 rows): the
+#: numeric parser's start-up is not worth it, and the messages of the cell parser are exact
+FAST_BODY = 1_000_000
+
+
+def _head_lines(text: str):
+    """``(line, offset of the next line)`` from the start of ``text``, without splitting the
+    whole file (the '#' lines and the header are all that is read this way)."""
+    start = 0
+    while start < len(text):
+        end = text.find("\n", start)
+        end = len(text) if end < 0 else end
+        yield text[start:end], end + 1
+        start = end + 1
+
+
+def _numeric_body(raw: bytes, text: str, body_at: int, width: int) -> np.ndarray | None:
+    """The data rows as a (rows, width) float array when the body (from character
+    ``body_at`` of ``text``) is a long, clean numeric table: no blank, '#' or short line
+    and no empty cell. Else None, and the cell-by-cell parser reads it and names the line
+    of anything wrong. A ten-million-row log then costs its array, not a Python string per
+    cell (about 300 bytes a row): numpy's parser reads the file's bytes where they are."""
+    if len(text) - body_at < FAST_BODY:
+        return None
+    offset = len(text[:body_at].encode("utf-8")) + (3 if raw.startswith(b"\xef\xbb\xbf") else 0)
+    stream = io.BytesIO(raw)
+    stream.seek(offset)
+    try:
+        values = np.loadtxt(stream, delimiter=",", dtype=np.float64, ndmin=2, comments=None, encoding="utf-8")
+    except ValueError:
+        return None
+    rows = raw.count(b"\n", offset) + (0 if raw.endswith(b"\n") else 1)
+    if values.shape != (rows, width):  # a blank line was skipped: the line numbers would drift
+        return None
+    return values
 
 
 def _with_options(meta: dict, origin: dict, options: ImportOptions) -> tuple[dict, dict]:
