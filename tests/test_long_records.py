@@ -88,9 +88,9 @@ def test_the_numeric_parser_reads_what_the_cell_parser_reads(tmp_path, numeric_p
     t, torque, angle = _spring(2_000)
     path = _csv(tmp_path / "log.csv", t, torque, angle)
     parsed = numeric_parser.read_measurement_file(path, None)
-    text = path.read_text()
-    body_at = text.index("angle_rad\n") + len("angle_rad\n")  # after a head with a non-ASCII note
-    fast = numeric_parser._numeric_body(path.read_bytes(), text, body_at, 3)
+    raw = path.read_bytes()
+    offset = raw.index(b"angle_rad\n") + len(b"angle_rad\n")  # after a head with a non-ASCII note
+    fast = numeric_parser._numeric_body(raw, offset, 3)
     np.testing.assert_array_equal(fast[:, 2], angle)
     monkeypatch.setattr(numeric_parser, "FAST_BODY", 10**12)  # the cell parser only
     again = numeric_parser.read_measurement_file(path, None)

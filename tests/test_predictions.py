@@ -59,3 +59,31 @@ def test_a_report_page_shows_the_predictions(spring_fit, tmp_path):
     page = fit_page(spring_fit, tmp_path, spring_fit.summary(), StiffnessTest())
     text = page.read_text()
     assert "What the fitted drive predicts" in text and "95 % band" in text and "lost motion, ±4 % T_N" in text
+
+
+def test_a_sweeps_running_torque_at_2000_rpm_has_the_band_of_its_linear_law():
+    """A Coulomb level plus viscous loss: the running torque at ω = 2000 rpm is
+    ``F_c + b ω`` and its variance ``[1, ω] Σ [1, ω]ᵀ`` from the amplitudes' covariance."""
+    import math
+
+    from test_running_torque import law_record
+
+    from hdsim.identification.predictions import CATALOG_SPEED, sweep_predictions
+    from hdsim.identification.running_fit import fit_running
+    from hdsim.model.input_friction import InputFriction
+
+    truth = InputFriction(starting_torque=0.05, coulomb_torque=0.05, viscous=2e-4, stribeck_speed=8.0,
+                          velocity_scale=0.05)
+    fit = fit_running(law_record(truth, noise=1e-3), ["damping"])
+    names = list(fit.fitted)
+    c, b = names.index("base.coulomb_torque"), names.index("damping.viscous")
+    cov = fit.coordinates.covariance
+    w = CATALOG_SPEED
+    predictions = {p.label: p for p in sweep_predictions(fit, None)}
+    forward = predictions["running torque at 2000 rpm, forward"]
+    assert forward.value == pytest.approx(fit.fitted["base.coulomb_torque"] + fit.fitted["damping.viscous"] * w,
+                                          rel=1e-6)
+    half = Z95 * math.sqrt(cov[c, c] + 2 * w * cov[c, b] + w * w * cov[b, b])
+    assert (forward.high - forward.low) / 2 == pytest.approx(half, rel=1e-6)
+    assert forward.low < 0.05 + 2e-4 * w < forward.high  # the truth lies in the band
+    assert forward.datasheet is None and forward.method == "linear in the amplitudes"

@@ -343,6 +343,9 @@ class BreakawayTest(RunningTorqueTest):
     def fit_figures(self, result, folder, scale):
         return []
 
+    def predictions(self, result, scale):
+        return []  # the starting torque is measured, with its uncertainty, in its own section
+
     def report_sections(self, diagnosis, diagnosis_json):
         rows = [(k, "—" if v is None else f"{v:.4g}") for k, v in diagnosis_json["metrics"].items()]
         return [("Starting torque (the file's shaft)", (("figure", "value [N·m]"), rows))]

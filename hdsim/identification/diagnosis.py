@@ -220,7 +220,7 @@ class TwistTest(TestKind):
 
         return [twist_fit_figure(result, folder)]
 
-    def predictions(self, result):
+    def predictions(self, result, scale):
         from hdsim.identification.predictions import catalog_predictions
 
         return catalog_predictions(result)

@@ -15,6 +15,11 @@ hysteresis loss). Each prediction carries a 95 % band propagated from the covari
     fifth of its first for some coordinate), 200 draws of ``u`` from ``N(u, Σ)``: the band
     is the 2.5–97.5 % quantiles of the metric.
 
+A friction sweep's fit is a law on the wave-generator shaft, linear in its amplitudes:
+`sweep_predictions` gives its no-load running torque at the catalog's 2000 rpm (each
+direction, averaged over a turn) and its starting torque, each with the band
+``±1.96 √(g Σ gᵀ)``, exact for a law linear in the amplitudes.
+
 Every set of parameters of one test runs as one batch (`hdsim.scenarios.run.run_scenario`
 on a batch model) through the quasi-static evaluator: the drive was identified by
 quasi-static fits (`hdsim.simulation.quasistatic`), so its parameters mean what that
@@ -150,3 +155,49 @@ def _metrics(model, coordinates, rows, scenario, metrics):
         return None
     size = 1 if rows is None else len(rows)
     return [np.broadcast_to(np.asarray(run.metrics[m], dtype=float).reshape(-1), (size,)) for m in metrics]
+
+
+#: the catalog's no-load running-torque speed of the input [rad/s] (2000 rpm)
+CATALOG_SPEED = 2000.0 * np.pi / 30.0
+
+
+def sweep_predictions(fit, scale) -> list[Prediction]:
+    """The catalog figures of a friction sweep's fitted law, with 95 % bands.
+
+    Parameters
+    ----------
+    fit : hdsim.identification.running_fit.RunningFit
+        The fit of a running-torque record.
+    scale : hdsim.io.data_checks.DriveScale or None
+        The drive's datasheet numbers (running torque at 2000 rpm and starting torque on
+        the input shaft).
+
+    Returns
+    -------
+    list of Prediction
+        Running torque forward and reverse at 2000 rpm and the starting torque, on the
+        input (wave-generator) shaft [N·m].
+    """
+    grid = np.linspace(0.0, 2.0 * np.pi, 72, endpoint=False)
+    figures = [("running torque at 2000 rpm, forward", lambda law: float(np.mean(law.torque(
+                    np.full(grid.size, CATALOG_SPEED), grid))), getattr(scale, "running_torque", 0.0)),
+               ("running torque at 2000 rpm, reverse", lambda law: float(-np.mean(law.torque(
+                    np.full(grid.size, -CATALOG_SPEED), grid))), getattr(scale, "running_torque", 0.0)),
+               ("starting torque", lambda law: float(law.starting_torque), getattr(scale, "starting_torque", 0.0))]
+    coordinates = fit.coordinates
+    out = []
+    for label, figure, datasheet in figures:
+        value = figure(fit.law)
+        low = high = np.nan
+        method = "no covariance"
+        if coordinates is not None:
+            sd = np.sqrt(np.maximum(np.diag(coordinates.covariance), 0.0))
+            g = np.zeros(sd.size)
+            for j in np.flatnonzero(sd > 0):  # the figure is linear in the amplitudes: one step each
+                moved = coordinates.law(coordinates.x + sd[j] * np.eye(sd.size)[j])
+                g[j] = np.nan if moved is None else (figure(moved) - value) / sd[j]
+            if np.all(np.isfinite(g)):
+                half = Z95 * float(np.sqrt(max(g @ coordinates.covariance @ g, 0.0)))
+                low, high, method = value - half, value + half, "linear in the amplitudes"
+        out.append(Prediction(label, "N·m", value, low, high, datasheet or None, method))
+    return out

@@ -201,10 +201,10 @@ def _unit_of(model, name: str) -> str:
         return ""
 
 
-def _predictions(page: Page, kind, fit) -> None:
+def _predictions(page: Page, kind, fit, scale_numbers) -> None:
     """What the fitted drive predicts for the maker's tests, with 95 % bands
     (`TestKind.predictions`); nothing for a kind without them."""
-    predictions = kind.predictions(fit) if fit is not None else []
+    predictions = kind.predictions(fit, scale_numbers) if fit is not None else []
     if not predictions:
         return
     rows = []
@@ -220,8 +220,8 @@ def _predictions(page: Page, kind, fit) -> None:
         rows.append((p.label, f"{shown(p.value)} {p.unit}", f"{shown(p.low)} – {shown(p.high)}" if banded else "—",
                      "—" if p.datasheet is None else f"{p.datasheet:.6g}", p.method))
     page.heading("What the fitted drive predicts")
-    page.text("The fitted drive put through the maker's tests (±4 % T_N lost motion; the ±T_N stiffness test), "
-              "each with a 95 % band propagated from the fit's covariance.")
+    page.text("The fitted drive put through the tests of the maker's datasheet, each with a 95 % band "
+              "propagated from the fit's covariance.")
     page.table(("test", "fitted drive", "95 % band", "datasheet", "band by"), rows)
 
 
@@ -418,7 +418,7 @@ def diagnosis_page(diagnosis, folder, summary: dict, scale_numbers) -> Path:
     w = d["whiteness"]
     page.text(f"Ljung–Box Q = {w['ljung_box_q']:.1f}, p = {w['p_value']:.3g}." if "ljung_box_q" in w else "")
     _parameters(page, d.get("final") or {}, getattr(diagnosis.final.fit, "model", None), unit == "N·m")
-    _predictions(page, kind, diagnosis.final.fit)
+    _predictions(page, kind, diagnosis.final.fit, scale_numbers)
     for heading, head_rows in kind.report_sections(diagnosis, d):
         page.heading(heading).table(*head_rows)
     figures = _common_figures(diagnosis, folder, unit, scale)
@@ -450,7 +450,7 @@ def fit_page(result, folder, summary: dict, kind, scale_numbers=None) -> Path:
     if checks:
         page.heading("The data").table(CHECK_HEAD, checks)
     _parameters(page, summary, getattr(result, "model", None), unit == "N·m")
-    _predictions(page, kind, result)
+    _predictions(page, kind, result, scale_numbers)
     figures = [_residual_vs_time(meas, [("+".join(result.families) or "base", result)], folder, unit, scale)]
     figures += kind.fit_figures(result, folder, scale_numbers)
     page.heading("Figures")

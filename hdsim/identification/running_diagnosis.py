@@ -147,6 +147,11 @@ class RunningTorqueTest(TestKind):
         return list(zip(paths, ("Plateau running torques against speed, with the fitted law and the catalog point.",
                                 "What the law without its ripple leaves, against the wave-generator angle.")))
 
+    def predictions(self, result, scale):
+        from hdsim.identification.predictions import sweep_predictions
+
+        return sweep_predictions(result, scale)
+
     def report_sections(self, diagnosis, diagnosis_json):
         from hdsim.identification.running_report import running_sections
 

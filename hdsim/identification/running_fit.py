@@ -198,6 +198,8 @@ class RunningFit(TorqueFit):
     uncertainty: dict = field(default_factory=dict)
     #: family -> the id of its form in the law
     forms: dict = field(default_factory=dict)
+    #: the amplitudes and their covariance (None without one)
+    coordinates: SweepCoordinates | None = None
 
     def metrics(self) -> dict:
         """``running_torque_forward_Nm`` / ``_reverse_Nm`` on the file's side: one definition
@@ -433,9 +435,11 @@ def fit_running(record, families=(), rows=None, widened=()) -> RunningFit:
     n_params = len(names) + len(grids)
     fitted = {f"{_owner_name(o)}.{n}": float(v) for o, n, v in zip(owners, names, x)}
     fitted.update({f"{f}.stribeck_speed": float(v) for f, v in nonlinear.items()})
-    sigma = _uncertainty(A[use], y[use] - A[use] @ x, owners, names)
-    return RunningFit(rec, families, law, inertia, prediction, residual, use, n_params, fitted, sigma,
-                      {t.family: t.id for t in terms[1:]})
+    cov = _covariance(A[use], y[use] - A[use] @ x)
+    coordinates = None if cov is None else SweepCoordinates(tuple(terms), tuple(owners), tuple(names),
+                                                            dict(nonlinear), rec.velocity_scale, x.copy(), cov)
+    return RunningFit(rec, families, law, inertia, prediction, residual, use, n_params, fitted,
+                      _uncertainty(cov, owners, names), {t.family: t.id for t in terms[1:]}, coordinates)
 
 
 def _law_of(rec: SweepRecord, terms: list, owners: list, names: list, x: np.ndarray, nonlinear: dict):
@@ -492,17 +496,47 @@ def _product(grids: list) -> list:
     return out
 
 
-def _uncertainty(A, r, owners, names) -> dict:
-    """1-σ of each amplitude from (AᵀA)⁻¹ s², widened by √(n/n_eff) for a correlated residual."""
+def _covariance(A, r) -> np.ndarray | None:
+    """Covariance of the amplitudes, (AᵀA)⁻¹ s² widened by n/n_eff for a correlated residual."""
     n, k = A.shape
     s2 = float(r @ r) / max(n - k, 1)
     try:
-        cov = np.linalg.pinv(A.T @ A) * s2
+        return np.linalg.pinv(A.T @ A) * s2 * (n / effective_n(r))
     except np.linalg.LinAlgError:
+        return None
+
+
+def _uncertainty(cov, owners, names) -> dict:
+    """1-σ of each amplitude by ``family.name``."""
+    if cov is None:
         return {}
-    widen = math.sqrt(n / effective_n(r))
-    sd = np.sqrt(np.maximum(np.diag(cov), 0.0)) * widen
+    sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
     return {f"{_owner_name(o)}.{name}": float(s) for o, name, s in zip(owners, names, sd)}
+
+
+@dataclass(frozen=True)
+class SweepCoordinates:
+    """The fitted amplitudes of a law, their covariance, and what writes amplitudes back
+    into a law: the fit's linear coordinates, where its uncertainty is propagated from
+    (`hdsim.identification.predictions.sweep_predictions`)."""
+
+    terms: tuple
+    owners: tuple
+    names: tuple
+    nonlinear: dict
+    velocity_scale: float
+    x: np.ndarray
+    covariance: np.ndarray
+
+    def law(self, x) -> InputFriction | None:
+        """The law with amplitudes ``x``; None where a term cannot hold them."""
+        law = unit_law(self.velocity_scale)
+        for term in self.terms:
+            coefficients = {n: float(v) for o, n, v in zip(self.owners, self.names, x) if o is term}
+            if not term.holds(law, coefficients):
+                return None
+            law = term.write_back(law, coefficients, self.nonlinear.get(term.family))
+        return law
 
 
 def _owner_name(owner) -> str:

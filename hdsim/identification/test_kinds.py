@@ -188,9 +188,10 @@ class TestKind:
         """The kind's tables of a diagnosis report: [(heading, (head, rows))]."""
         return []
 
-    def predictions(self, result) -> list:
+    def predictions(self, result, scale) -> list:
         """What the fitted drive predicts for the maker's tests, each with a 95 % band
-        (`hdsim.identification.predictions.Prediction`), for the report pages; none here."""
+        (`hdsim.identification.predictions.Prediction`), for the report pages (``scale``:
+        the drive's datasheet numbers); none here."""
         return []
 
     def write_report(self, diagnosis, directory, summary: dict, scale):

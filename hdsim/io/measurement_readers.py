@@ -188,11 +188,16 @@ def read_csv(path: str, raw: bytes, columns: dict[str, str] | None,
     header = _header_cells(header_line, header_at, where)
     index = resolve_columns(header, test, columns, where, "column", _optional(options))
 
-    fast = _numeric_body(raw, text, body_at, len(header))
-    if fast is not None:  # a clean numeric table: parsed without a Python string per cell
-        numbers = np.arange(header_at + 1, header_at + 1 + len(fast))
-        data = {si: fast[:, i] * factor for si, (i, factor) in index.items()}
-        return _finish(path, data, numbers, options, test, ratio, rated, meta, header, index)
+    offset = len(text[:body_at].encode("utf-8")) + (3 if raw.startswith(b"\xef\xbb\xbf") else 0)
+    if len(raw) - offset >= FAST_BODY:
+        del text  # a long log's decoded copy is as large as the file: not kept while numpy parses
+        fast = _numeric_body(raw, offset, len(header))
+        if fast is not None:  # a clean numeric table: parsed without a Python string per cell
+            numbers = np.arange(header_at + 1, header_at + 1 + len(fast))
+            data = {si: fast[:, i] * factor for si, (i, factor) in index.items()}
+            del fast
+            return _finish(path, data, numbers, options, test, ratio, rated, meta, header, index)
+        text = raw.decode("utf-8-sig")
     lines = text[body_at:].split("\n")
     rows: list[list[str]] = []
     numbers: list[int] = []
@@ -227,7 +232,7 @@ def _finish(path, data, numbers, options, test, ratio, rated, meta, header, inde
     return Parsed(data, test, ratio, rated, {**meta, **options.overrides()}, report)
 
 
-#: a body shorter than this [characters] is parsed cell by cell (about 20,000 rows): the
+#: a body shorter than this [bytes] is parsed cell by cell (about 20,000 rows): the
 #: numeric parser's start-up is not worth it, and the messages of the cell parser are exact
 FAST_BODY = 1_000_000
 
@@ -243,15 +248,12 @@ def _head_lines(text: str):
         start = end + 1
 
 
-def _numeric_body(raw: bytes, text: str, body_at: int, width: int) -> np.ndarray | None:
-    """The data rows as a (rows, width) float array when the body (from character
-    ``body_at`` of ``text``) is a long, clean numeric table: no blank, '#' or short line
-    and no empty cell. Else None, and the cell-by-cell parser reads it and names the line
-    of anything wrong. A ten-million-row log then costs its array, not a Python string per
-    cell (about 300 bytes a row): numpy's parser reads the file's bytes where they are."""
-    if len(text) - body_at < FAST_BODY:
-        return None
-    offset = len(text[:body_at].encode("utf-8")) + (3 if raw.startswith(b"\xef\xbb\xbf") else 0)
+def _numeric_body(raw: bytes, offset: int, width: int) -> np.ndarray | None:
+    """The data rows as a (rows, width) float array when the body (from byte ``offset`` of
+    ``raw``) is a clean numeric table: no blank, '#' or short line and no empty cell. Else
+    None, and the cell-by-cell parser reads it and names the line of anything wrong. A
+    ten-million-row log then costs its array, not a Python string per cell (about 300
+    bytes a row): numpy's parser reads the file's bytes where they are."""
     stream = io.BytesIO(raw)
     stream.seek(offset)
     try:
