@@ -40,7 +40,7 @@ def main() -> None:
     print(f"study: {OUTPUT}, {len(NAMES)} parameters, N={args.n}, {study.evaluations} runs, "
           f"{args.workers} workers: {wall:.1f} s, {per_run * 1e3:.0f} ms of wall time per run "
           f"(evaluator: {study.extra['evaluator']['chosen']})")
-    print("  ST", dict(zip(NAMES, np.round(study.analysis["ST"], 3))))
+    print("  ST", {n: round(float(v), 3) for n, v in zip(NAMES, study.analysis["ST"])})
 
     unit = load_unit("CSG-25-100")
     nominal = unit.params()

@@ -89,3 +89,61 @@ def test_every_figure_script_is_listed_on_the_home_page():
     home = (ROOT / "docs" / "index.md").read_text(encoding="utf-8")
     scripts = sorted(p.name for p in (ROOT / "docs").glob("make_*.py"))
     assert scripts and all(f"python docs/{name}" in home for name in scripts), scripts
+
+
+# --------------------------------------------------------------------------- tables of the physics page
+PHYSICS = ROOT / "docs" / "physics.md"
+#: the five-unit table's columns: (metric of `hdsim demo --json`, or the elastic span)
+UNIT_COLUMNS = ("elastic_lost_motion_arcmin", "lost_motion_arcmin", "lost_motion_centre_line_arcmin",
+                "hysteresis_loss_arcmin", "torsion_at_rated_arcmin")
+
+
+def _table_after(text: str, marker: str) -> list[list[str]]:
+    """The cells of the first markdown table after ``marker`` (header and rule left out)."""
+    start = text.index(marker)
+    rows = []
+    for line in text[start:].splitlines()[1:]:
+        if line.startswith("|"):
+            rows.append([cell.strip() for cell in line.strip("|").split("|")])
+        elif rows:
+            break
+    return rows[2:]
+
+
+def _demo_metrics(run_lost_motion, run_stiffness, unit) -> dict:
+    from hdsim.units import rad_to_arcmin
+
+    metrics = {k: float(v[0]) for run in (run_lost_motion, run_stiffness) for k, v in run.metrics.items()}
+    metrics["elastic_lost_motion_arcmin"] = rad_to_arcmin(0.08 * float(unit.drive.rated_torque)
+                                                           / unit.provenance["catalog"]["K1"])
+    return metrics
+
+
+def test_the_physics_pages_table_of_the_default_unit_is_what_the_demo_gives(default_lost_motion_run,
+                                                                              default_stiffness_run):
+    from hdsim.model.catalog import load_unit
+
+    metrics = _demo_metrics(default_lost_motion_run, default_stiffness_run, load_unit())
+    rows = _table_after(PHYSICS.read_text(encoding="utf-8"), "The default CSG-25-100 gives (`hdsim demo --json`)")
+    assert len(rows) == 7
+    for name, quoted, _ in rows:
+        value = quoted.replace(" ", "")  # a thin space groups thousands: 30 497
+        assert _agrees(value, metrics[name.strip("`")]), (name, quoted, metrics[name.strip("`")])
+    five = _table_after(PHYSICS.read_text(encoding="utf-8"), "The same holds for all five units")
+    row = next(r for r in five if r[0] == "CSG-25-100")
+    for column, quoted in zip(UNIT_COLUMNS, row[1:]):
+        assert _agrees(quoted, metrics[column]), (column, quoted, metrics[column])
+
+
+@pytest.mark.slow
+def test_the_physics_pages_table_of_the_five_units_is_what_the_demo_gives():
+    from hdsim.model.catalog import load_unit
+    from hdsim.scenarios.run import run_scenario
+
+    five = _table_after(PHYSICS.read_text(encoding="utf-8"), "The same holds for all five units")
+    assert len(five) == 5
+    for row in five:
+        unit = load_unit(row[0])
+        metrics = _demo_metrics(run_scenario(unit, "lost_motion"), run_scenario(unit, "stiffness"), unit)
+        for column, quoted in zip(UNIT_COLUMNS, row[1:]):
+            assert _agrees(quoted, metrics[column]), (row[0], column, quoted, metrics[column])
