@@ -86,3 +86,23 @@ def test_fit_report_writes_one_self_contained_page(tmp_path, cli):
     assert html.count('src="data:image/png;base64,') == md.count("![") >= 2
     assert html.count("src=") == md.count("![")
     assert "Fitted parameters" in md and "SHA-256" in md and "| effects | friction |" in md
+
+
+def test_the_parameter_table_gives_each_parameter_its_unit():
+    from hdsim.identification.breakaway import BreakawayTest
+    from hdsim.identification.diagnosis import StiffnessTest
+    from hdsim.identification.running_diagnosis import RunningTorqueTest
+    from hdsim.model.catalog import load_unit
+
+    class Fitted:  # what the twist kinds read of a fit: its model
+        model = load_unit()
+
+    assert StiffnessTest().parameter_unit(Fitted, "friction.slip_torque") == "N·m"
+    assert StiffnessTest().parameter_unit(Fitted, "damping.coefficient") == "N·m·s/rad"
+    assert StiffnessTest().parameter_unit(Fitted, "no.such") == ""
+    sweep = RunningTorqueTest()
+    assert [sweep.parameter_unit(None, n) for n in ("base.coulomb_torque", "damping.viscous", "base.inertia",
+                                                    "ripple.ripple_cos_2", "friction.stribeck_speed")] == [
+        "N·m", "N·m·s/rad", "kg·m²", "N·m", "rad/s"]
+    assert BreakawayTest().parameter_unit(None, "viscous") == "N·m·s/rad"
+    assert "file's shaft" in BreakawayTest.parameters_heading and "wave-generator" in sweep.parameters_heading

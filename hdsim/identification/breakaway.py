@@ -343,6 +343,8 @@ class BreakawayTest(RunningTorqueTest):
     def fit_figures(self, result, folder, scale):
         return []
 
+    parameters_heading = "Fitted parameters (torques on the file's shaft)"
+
     def predictions(self, result, scale):
         return []  # the starting torque is measured, with its uncertainty, in its own section
 

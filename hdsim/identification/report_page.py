@@ -26,7 +26,6 @@ from pathlib import Path
 import numpy as np
 
 from hdsim.atomic import write_text_atomic
-from hdsim.errors import InputError
 from hdsim.io.figures import save_figure
 
 __all__ = ["Page", "new_figure", "save", "step_label", "diagnosis_page", "wrong_test_page", "rounded", "provenance", "fit_page"]
@@ -182,23 +181,16 @@ def _summary_box(page: Page, d: dict, kind) -> None:
     page.table(("summary", ""), rows)
 
 
-def _parameters(page: Page, fitted: dict, model=None, torque_test: bool = False) -> None:
+def _parameters(page: Page, fitted: dict, kind, result) -> None:
     """The fitted values (a fit's JSON: ``params`` or ``fitted``, and ``uncertainty``) rounded
-    to their uncertainty, with each one's unit where ``model`` (the fitted one) knows it."""
+    to their uncertainty, with each one's unit (`TestKind.parameter_unit`)."""
     values = fitted.get("params") or fitted.get("fitted") or {}
     sigma = fitted.get("uncertainty") or {}
-    rows = [(name, rounded(float(v), sigma.get(name)), _unit_of(model, name)) for name, v in values.items()]
+    rows = [(name, rounded(float(v), sigma.get(name)), kind.parameter_unit(result, name))
+            for name, v in values.items()]
     if rows:
-        page.heading("Fitted parameters" + (" (torques on the wave-generator shaft)" if torque_test else ""))
+        page.heading(kind.parameters_heading)
         page.table(("parameter", "value ± standard uncertainty", "unit"), rows)
-
-
-def _unit_of(model, name: str) -> str:
-    """The unit of a dotted parameter of ``model``; "" where it has no such parameter."""
-    try:
-        return model.param_info(name).get("unit", "")
-    except (AttributeError, InputError):
-        return ""
 
 
 def _predictions(page: Page, kind, fit, scale_numbers) -> None:
@@ -417,7 +409,7 @@ def diagnosis_page(diagnosis, folder, summary: dict, scale_numbers) -> Path:
         page.text("Final model:").bullets(d["findings"]["final"])
     w = d["whiteness"]
     page.text(f"Ljung–Box Q = {w['ljung_box_q']:.1f}, p = {w['p_value']:.3g}." if "ljung_box_q" in w else "")
-    _parameters(page, d.get("final") or {}, getattr(diagnosis.final.fit, "model", None), unit == "N·m")
+    _parameters(page, d.get("final") or {}, kind, diagnosis.final.fit)
     _predictions(page, kind, diagnosis.final.fit, scale_numbers)
     for heading, head_rows in kind.report_sections(diagnosis, d):
         page.heading(heading).table(*head_rows)
@@ -449,7 +441,7 @@ def fit_page(result, folder, summary: dict, kind, scale_numbers=None) -> Path:
     checks = [(c["status"], c["check"], c["message"]) for c in summary.get("checks", [])]
     if checks:
         page.heading("The data").table(CHECK_HEAD, checks)
-    _parameters(page, summary, getattr(result, "model", None), unit == "N·m")
+    _parameters(page, summary, kind, result)
     _predictions(page, kind, result, scale_numbers)
     figures = [_residual_vs_time(meas, [("+".join(result.families) or "base", result)], folder, unit, scale)]
     figures += kind.fit_figures(result, folder, scale_numbers)

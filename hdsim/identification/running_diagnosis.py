@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from types import MappingProxyType
 
 import numpy as np
 
@@ -46,7 +47,7 @@ from hdsim.identification.residuals import EXPLAINED_RATIO, whiteness
 from hdsim.identification.running_fit import SweepRecord, fit_running, running_plausibility
 from hdsim.identification.test_kinds import TestKind, register_test_kind, test_kind
 from hdsim.io.measurement import Measurement
-from hdsim.model.running_terms import RUNNING_FAMILIES, RUNNING_FORMS, parse_running_forms
+from hdsim.model.running_terms import BASE_TERM, RUNNING_FAMILIES, RUNNING_FORMS, parse_running_forms
 
 __all__ = ["RunningTorqueTest", "RunningSession", "diagnose_running", "running_limits", "RUNNING_THRESHOLDS"]
 
@@ -146,6 +147,17 @@ class RunningTorqueTest(TestKind):
         paths = fit_figures(result, Path(folder) / "fit", (scale.running_torque or None) if scale else None)
         return list(zip(paths, ("Plateau running torques against speed, with the fitted law and the catalog point.",
                                 "What the law without its ripple leaves, against the wave-generator angle.")))
+
+    parameters_heading = "Fitted parameters (on the wave-generator shaft)"
+    #: units of the fitted figures that are no term's torque amplitude (the breakaway
+    #: fit's bare ``viscous`` included)
+    OTHER_UNITS = MappingProxyType({"inertia": "kg·m²", "stribeck_speed": "rad/s", "viscous": "N·m·s/rad"})
+
+    def parameter_unit(self, result, name):
+        family, _, column = name.rpartition(".")
+        terms = [BASE_TERM, *RUNNING_FAMILIES.values(), *(t for forms in RUNNING_FORMS.values() for t in forms)]
+        own = {c: u for t in terms if t.family == family for c, u in t.column_units.items()}
+        return own.get(column) or self.OTHER_UNITS.get(column, "N·m")
 
     def predictions(self, result, scale):
         from hdsim.identification.predictions import sweep_predictions

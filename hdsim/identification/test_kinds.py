@@ -188,6 +188,17 @@ class TestKind:
         """The kind's tables of a diagnosis report: [(heading, (head, rows))]."""
         return []
 
+    #: the heading of a report's fitted-parameter table (a torque test names its shaft)
+    parameters_heading: ClassVar[str] = "Fitted parameters"
+
+    def parameter_unit(self, result, name: str) -> str:
+        """The unit of a fitted parameter of ``result`` for the report's table: the fitted
+        model's own (`HarmonicDrive.param_info`), "" where it has none."""
+        try:
+            return result.model.param_info(name).get("unit", "")
+        except (AttributeError, InputError):
+            return ""
+
     def predictions(self, result, scale) -> list:
         """What the fitted drive predicts for the maker's tests, each with a 95 % band
         (`hdsim.identification.predictions.Prediction`), for the report pages (``scale``:

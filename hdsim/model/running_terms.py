@@ -94,6 +94,12 @@ class RunningTerm(FamilyKnowledge):
     id: ClassVar[str] = ""
     #: what the term looks like in a sweep (for reports)
     signature: ClassVar[str] = ""
+    #: the unit of a column's amplitude where it is not a torque [N·m] (for reports)
+    column_units: ClassVar[Mapping[str, str]] = MappingProxyType({})
+
+    def unit_of(self, column: str) -> str:
+        """The unit of the amplitude of ``column`` on the wave-generator shaft."""
+        return self.column_units.get(column, "N·m")
 
     def grid(self, speeds: np.ndarray) -> tuple[float, ...]:
         """Values of the term's non-linear parameter to try (``()``: none)."""
@@ -185,6 +191,8 @@ class ViscousLoss(RunningTerm):
     family: ClassVar[str] = "damping"
     id: ClassVar[str] = "viscous"
     signature: ClassVar[str] = "torque growing in proportion to speed"
+    column_units: ClassVar[Mapping[str, str]] = MappingProxyType({
+        "viscous": "N·m·s/rad", "churning_sqrt": "N·m·(s/rad)^½", "churning_square": "N·m·s²/rad²"})
     separated_by: ClassVar[Mapping[str, str]] = MappingProxyType({
         "ripple": "longer plateaus at several speeds: a ripple averages out over a revolution, a viscous loss "
                   "grows with speed",
