@@ -49,19 +49,22 @@ def test_the_page_says_how_to_reproduce_it_and_rounds_values_to_their_uncertaint
     md = (tmp_path / "rep" / "index.md").read_text()
     assert hashlib.sha256((tmp_path / "bench.csv").read_bytes()).hexdigest() in md
     assert "| hdsim |" in md and "Fitted parameters" in md and " ± " in md
-    # the noise floor is the record's (the data checks'): the baseline's and the final
-    # model's findings name that one number
-    from hdsim.signals import noise_level
+    # one noise floor on the page: the summary's (the final model's white residual) is the
+    # one the baseline's and the final model's findings are read against
+    from hdsim.identification.residuals import findings
     from hdsim.units import ARCSEC_PER_RAD
 
-    from hdsim.identification.residuals import findings
-
+    cols, tr = truth.make_stiffness_data({"friction", "hardening"}, set(), seed=11, n_rows=1200)
+    truth.write_csv(tmp_path / "hardening.csv", cols, tr["meta"])
+    d = diagnose(load_measurement(tmp_path / "hardening.csv"), "friction", families=["hardening"]).to_json()
+    assert d["added"] == ["hardening"]  # two models: the baseline's residual and the final one's
+    floor = f"{d['whiteness']['noise_floor_rad'] * ARCSEC_PER_RAD:.1f} arcsec"
+    assert [d["findings"]["baseline"][0].rsplit("noise floor of ", 1)[1],
+            d["findings"]["final"][0].rsplit("noise floor of ", 1)[1]] == [floor, floor]
     meas = load_measurement(tmp_path / "bench.csv")
-    floor = f"{noise_level(meas.angle) * ARCSEC_PER_RAD:.1f} arcsec"
     rng = np.random.default_rng(0)
     for residual in (rng.normal(0, 1e-6, len(meas)), rng.normal(0, 5e-6, len(meas))):  # two models' residuals
-        assert findings(meas, residual)[0].endswith(f"noise floor of {floor}")
-    assert result.to_json()["findings"]["baseline"][0].endswith(floor)
+        assert findings(meas, residual, floor=2e-6)[0].endswith(f"noise floor of {2e-6 * ARCSEC_PER_RAD:.1f} arcsec")
 
 
 def test_a_decision_says_how_an_error_changed_in_words():
@@ -106,3 +109,18 @@ def test_the_parameter_table_gives_each_parameter_its_unit():
         "N·m", "N·m·s/rad", "kg·m²", "N·m", "rad/s"]
     assert BreakawayTest().parameter_unit(None, "viscous") == "N·m·s/rad"
     assert "file's shaft" in BreakawayTest.parameters_heading and "wave-generator" in sweep.parameters_heading
+
+
+def test_a_sweeps_law_is_shown_to_four_digits_with_its_ripple_in_newton_metres():
+    from hdsim.identification.running_report import law_rows
+
+    table = {"starting_torque_Nm": 0.07695981543068439, "coulomb_share": 0.5231135802718493,
+             "stribeck_speed_rpm": 42.080978193589985, "viscous_Nms": 0.0, "coulomb_asymmetry_Nm": 2.2688e-05,
+             "ripple_orders": [1.0, 2.0], "ripple_amplitudes_of_level": [0.022396766274298555, 0.1122728892558],
+             "ripple_phases": [-0.863330381759471, 1.3053499705680724], "position_torque_orders": [],
+             "position_torque_amplitudes_Nm": [], "position_torque_phases": []}
+    rows = {name: (value, unit) for name, value, unit in law_rows(table)}
+    level = 0.07695981543068439 * 0.5231135802718493
+    assert rows["Coulomb level F_c"] == (f"{level:.4g}", "N·m")
+    assert rows["ripple amplitudes"] == (f"{level * 0.022396766274298555:.4g}, {level * 0.1122728892558:.4g}", "N·m")
+    assert rows["starting torque F_s"][0] == "0.07696" and rows["position torque orders"][0] == "none"

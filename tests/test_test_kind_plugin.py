@@ -94,7 +94,7 @@ class CurveSession:
     def confidence(self, steps):
         return {}
 
-    def findings(self, step):
+    def findings(self, step, whiteness):
         return []
 
 

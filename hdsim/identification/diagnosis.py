@@ -320,8 +320,8 @@ class TwistSession:
         return diagnosis_confidence(self.measurement, steps, self.masks, self.one_rate, self.kind.thresholds,
                                     self.kind.rate_partner)
 
-    def findings(self, step: Step) -> list:
-        return findings(self.measurement, step.fit.residual)
+    def findings(self, step: Step, whiteness: dict) -> list:
+        return findings(self.measurement, step.fit.residual, floor=whiteness.get("noise_floor_rad"))
 
     def _slots(self, model, all_starts: list, fold_starts: list, label: str) -> list[list]:
         """The fits of one model: all rows and each fold, one problem per start (the effects'

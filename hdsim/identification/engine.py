@@ -262,11 +262,15 @@ def run_diagnosis(kind, session, pool: list, *, max_rounds: int | None = None, l
         steps.append(step)
     steps, reshaped, ambiguous = _settle_stand_in(steps, reshaped, ambiguous)
     step = steps[-1]
+    # one noise floor on the page: the final model's (its white residual), which the summary
+    # states, is also the one both steps' findings are read against
+    whiteness = session.explained(step)
     return Diagnosis(kind=kind, measurement=session.measurement, steps=steps, added=added, ambiguous=ambiguous,
-                     reshaped=reshaped, fold_rule=session.fold_rule, whiteness=session.explained(step),
+                     reshaped=reshaped, fold_rule=session.fold_rule, whiteness=whiteness,
                      seconds=time.perf_counter() - t0, passes=session.passes,
                      confidence=session.confidence(steps),
-                     findings_before=session.findings(steps[0]), findings_after=session.findings(step))
+                     findings_before=session.findings(steps[0], whiteness),
+                     findings_after=session.findings(step, whiteness))
 
 
 def _settle_stand_in(steps: list, reshaped: list, ambiguous: list) -> tuple[list, list, list]:

@@ -27,7 +27,7 @@ import numpy as np
 # the χ² tail from scipy.special: scipy.stats would add 0.8 s to every `hdsim diagnose`
 from scipy.special import chdtrc
 
-from hdsim.signals import loading_direction, noise_level
+from hdsim.signals import loading_direction
 from hdsim.units import ARCMIN_PER_RAD, ARCSEC_PER_RAD
 
 __all__ = ["ljung_box", "noise_floor", "whiteness", "views", "findings", "order_spectrum",
@@ -175,7 +175,7 @@ def _band_mean(mask, r):
     return float(np.mean(r[mask])) if np.count_nonzero(mask) >= 3 else float("nan")
 
 
-def findings(meas, residual, max_items: int = 5) -> list[str]:
+def findings(meas, residual, max_items: int = 5, floor: float | None = None) -> list[str]:
     """Plain sentences that say where the model misses, largest first.
 
     Parameters
@@ -186,6 +186,9 @@ def findings(meas, residual, max_items: int = 5) -> list[str]:
         Residual [rad], one value per row of ``meas``.
     max_items : int
         Most findings after the opening sentence.
+    floor : float, optional
+        The noise floor to read the residual against [rad]; default the residual's own
+        (`noise_floor`).
 
     Returns
     -------
@@ -200,9 +203,9 @@ def findings(meas, residual, max_items: int = 5) -> list[str]:
     Tmax = max(float(np.max(np.abs(T))), 1e-12)
     rms = float(np.sqrt(np.mean(r * r)))
     out: list[tuple[float, str]] = []
-    # the data's noise floor, the one the data checks and the report's summary give: a
-    # property of the record, not of the model whose residual this is
-    floor = noise_level(meas.kinematic_error if meas.test == "kinematic_error" else meas.angle)
+    # the page's one noise floor when the caller gives it (a diagnosis: its final model's),
+    # so that the baseline's and the final model's findings are read against one number
+    floor = noise_floor(r) if floor is None else float(floor)
 
     def arcmin(x):
         return f"{abs(x) * ARCMIN_PER_RAD:.2f} arcmin"

@@ -253,7 +253,7 @@ class RunningSession:
     def confidence(self, steps) -> dict:
         return {}
 
-    def findings(self, step) -> list:
+    def findings(self, step, whiteness) -> list:
         return []
 
     def _holdout_rss(self, families, widened=()) -> list[float] | None:

@@ -137,7 +137,26 @@ def running_figures(diagnosis, folder, catalog_running_torque: float | None = No
 
 def running_sections(d: dict) -> list[tuple[str, tuple]]:
     """The fitted law and the sweep's metrics, as (heading, (head, rows)) of the report."""
-    law = [(k, str(v)) for k, v in d["final"]["law"].items()]
     metrics = [(k, "not run" if v is None else f"{v:.4g}") for k, v in d["metrics"].items()]
-    return [("Fitted law (wave-generator shaft)", (("field", "value"), law)),
+    return [("Fitted law (wave-generator shaft)", (("term", "value", "unit"), law_rows(d["final"]["law"]))),
             ("Metrics", (("metric", "value"), metrics))]
+
+
+def law_rows(law: dict) -> list[tuple[str, str, str]]:
+    """A fit's law table (`RunningFit.law_table`) as a reader's rows: 4 significant digits,
+    and the ripple as torques [N·m] (the table keeps them as fractions of the level)."""
+    def shown(values):
+        return ", ".join(f"{float(v):.4g}" for v in values) if values else "none"
+
+    level = law["starting_torque_Nm"] * law["coulomb_share"]
+    return [("starting torque F_s", shown([law["starting_torque_Nm"]]), "N·m"),
+            ("Coulomb level F_c", shown([level]), "N·m"),
+            ("Stribeck speed ω_s", shown([law["stribeck_speed_rpm"]]), "rpm"),
+            ("viscous b", shown([law["viscous_Nms"]]), "N·m·s/rad"),
+            ("direction asymmetry Δ", shown([law["coulomb_asymmetry_Nm"]]), "N·m"),
+            ("ripple orders", shown(law["ripple_orders"]), "per WG turn"),
+            ("ripple amplitudes", shown([level * r for r in law["ripple_amplitudes_of_level"]]), "N·m"),
+            ("ripple phases", shown(law["ripple_phases"]), "rad"),
+            ("position torque orders", shown(law["position_torque_orders"]), "per WG turn"),
+            ("position torque amplitudes", shown(law["position_torque_amplitudes_Nm"]), "N·m"),
+            ("position torque phases", shown(law["position_torque_phases"]), "rad")]
