@@ -62,8 +62,9 @@ def write_run_file(path, run) -> Path:
     result = run.result
     with atomic_path(path) as tmp:
         with h5py.File(tmp, "w") as f:
+            evaluator = "quasistatic" if result.solver.get("method") == "quasistatic" else "dynamic"
             f.attrs.update(hdsim_version=__version__, unit=run.model.name, scenario=run.scenario.name,
-                           setup=result.setup, evaluator="quasistatic" if result.solver.get("method") == "quasistatic" else "dynamic",
+                           setup=result.setup, evaluator=evaluator,
                            created=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"))
             f.create_dataset("t", data=result.t).attrs["unit"] = "s"
             for group, table in (("states", result.states), ("signals", result.signals)):
@@ -102,7 +103,8 @@ def read_run_file(path) -> tuple[HarmonicDrive, Scenario, SimulationResult, dict
         (or the stored drive-file table) with the stored parameters and effects, the
         scenario (its ``source`` is the file), the result (times [s], states, signals,
         solver statistics; ``metadata`` holds the file's ``unit``, ``scenario``,
-        ``hdsim_version``, ``created`` and ``evaluator``, the one that ran) and the metrics ``{name: (M,)}``.
+        ``hdsim_version``, ``created`` and ``evaluator``, the one that ran) and the
+        metrics ``{name: (M,)}``.
 
     Raises
     ------
