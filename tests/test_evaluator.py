@@ -16,7 +16,9 @@ import pytest
 from hdsim.errors import InputError
 from hdsim.model import effects as fx
 from hdsim.model.catalog import load_unit
+from hdsim.scenarios.evaluator import choose_evaluator
 from hdsim.scenarios.locked import MIN_PERIODS_PER_RAMP, first_period, quasistatic_criterion
+from hdsim.scenarios.registry import get_setup
 from hdsim.scenarios.run import read_run, run_scenario
 from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario
 from hdsim.sensitivity.scenario_outputs import ScenarioMetric, model_function, nominal_values
@@ -67,8 +69,8 @@ def test_auto_keeps_the_dynamic_model_where_the_criterion_fails():
     fast = lost_motion.with_updates({"load.rate": lost_motion.data["load"]["rate"] * ramp / (10.0 * period)})
     holds, reason, figures = quasistatic_criterion(unit, fast)
     assert not holds and "inertia" in reason and figures["periods_per_ramp"] == pytest.approx(10.0, rel=1e-9)
-    run = run_scenario(unit, fast, samples_per_segment=4, evaluator="auto")
-    assert run.result.metadata["evaluator"]["chosen"] == "dynamic" and run.result.solver["method"] == "Radau"
+    choice = choose_evaluator(get_setup(fast.setup), unit, fast, "auto")
+    assert choice.chosen == "dynamic" and choice.reason == reason
 
 
 def test_the_driven_bench_has_no_quasistatic_evaluator():
