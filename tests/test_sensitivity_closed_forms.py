@@ -95,3 +95,33 @@ def test_batched_bootstrap_is_the_same_statistic(monkeypatch):
     np.testing.assert_array_equal(whole["S1"], batched["S1"])
     # Different resamples, same statistic: agree to bootstrap noise (~1/sqrt(2B)).
     np.testing.assert_allclose(batched["S1_conf"][:4], whole["S1_conf"][:4], rtol=0.25)
+
+
+class _NearlyConstant:
+    """An output that varies across the design by 1e-6 of its value, from a simulator that
+    resolves 1e-4 of it: what the indices of such a study show is the simulator's error."""
+
+    def __call__(self, X):
+        X = np.atleast_2d(X)
+        return 42.5 + 1e-6 * 42.5 * X[:, 0]
+
+    def resolution(self, y):
+        return 1e-4 * float(np.mean(np.abs(y)))
+
+
+def test_a_study_of_an_output_below_the_simulators_resolution_is_flagged():
+    from hdsim.sensitivity.checks import RESOLVED_SPREAD, resolution_flags
+    from hdsim.sensitivity.problem import build_problem
+
+    assert resolution_flags([1.0, 2.0, 3.0], 0.01) == []
+    assert resolution_flags([1.0, 1.0 + 1e-9], 0.01) and resolution_flags([1.0, 2.0], None) == []
+    problem = build_problem(["a", "b"], {}, None, {"a": (0.0, 1.0), "b": (0.0, 1.0)}, None)
+    result = run_study(_NearlyConstant(), problem, 64, workers=1, progress=False, log=lambda *a: None)
+    assert not result.checks["ok"]
+    assert any("the simulator's resolution" in flag and f"{RESOLVED_SPREAD:g}x" in flag
+               for flag in result.checks["flags"])
+    # the scenario outputs say how finely they resolve: the solver's tolerance of their value
+    from hdsim.sensitivity.scenario_outputs import STUDY_SOLVER, ScenarioMetric
+
+    metric = ScenarioMetric("CSG-25-100", ("flexspline.h_pz",), "transmission_accuracy_arcsec", "kinematic_error")
+    assert metric.resolution(np.array([42.0, 43.0])) == pytest.approx(STUDY_SOLVER.rtol * 42.5)

@@ -11,7 +11,9 @@ estimate's own replicate half-widths (in quadrature) to a fixed ``tol``:
 Two flags point at the mistakes these checks are blind to: a model that looks
 additive (ΣS ≈ 1) yet has ST ≠ S — impossible for a correct design — and "every
 input total ≈ 1 with no main effects", the signature of outputs not paired with
-their rows (or a pure-interaction model).
+their rows (or a pure-interaction model). A third (`resolution_flags`) asks whether the
+output moves at all: indices of an output that varies less across the design than its
+simulator resolves measure the solver's error, and pass every check above.
 """
 
 from __future__ import annotations
@@ -70,6 +72,38 @@ def consistency_checks(S1, ST, S1_half=None, ST_half=None, names=None, tol=0.02)
     return {"ok": bool(all(it["ok"] for it in items) and not flags), "tol": tol,
             "sum_S1": sum1, "sum_ST": sumT, "interaction_share": 1 - sum1,
             "items": items, "flags": flags}
+
+
+#: an output must vary across the design by this many times the simulator's resolution
+RESOLVED_SPREAD = 10.0
+
+
+def resolution_flags(y, resolution: float | None) -> list[str]:
+    """A flag when the outputs ``y`` vary less than `RESOLVED_SPREAD` × ``resolution``.
+
+    Parameters
+    ----------
+    y : array_like
+        The study's outputs (NaN for failed rows).
+    resolution : float or None
+        The size of the simulator's own error on one output, in its unit (a model's
+        ``resolution(y)``); None for a model that does not say.
+
+    Returns
+    -------
+    list of str
+        One sentence, or none.
+    """
+    y = np.asarray(y, dtype=float)
+    y = y[np.isfinite(y)]
+    if resolution is None or y.size < 2:
+        return []
+    spread = float(np.std(y))
+    if spread >= RESOLVED_SPREAD * resolution:
+        return []
+    return [f"the output varies by {spread:.3g} (standard deviation) across the design, under "
+            f"{RESOLVED_SPREAD:g}x the simulator's resolution ({resolution:.3g}): the indices measure the "
+            "solver's error, not the parameters; widen the ranges or study another output"]
 
 
 def _item(check, value, limit, ok) -> dict:

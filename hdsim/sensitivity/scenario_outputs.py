@@ -216,6 +216,16 @@ class ScenarioMetric:
             y[valid] = self._evaluate(X[valid])
         return y
 
+    def resolution(self, y) -> float:
+        """The size of the simulator's own error on one output [unit of the output]: the
+        solver's relative tolerance (`STUDY_SOLVER`) of the outputs' mean magnitude, or a
+        millionth of it through the quasi-static evaluator (Newton to 1e-9 of the torque).
+        A study whose outputs vary less than ten times this says so (`resolution_flags`)."""
+        finite = np.asarray(y, dtype=float)
+        finite = finite[np.isfinite(finite)]
+        relative = 1e-6 if self.evaluator == "quasistatic" else STUDY_SOLVER.rtol
+        return relative * float(np.mean(np.abs(finite))) if finite.size else 0.0
+
     def _model(self, X):
         return as_drive(self.drive).with_updates({n: X[:, j] for j, n in enumerate(self.names)})
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from hdsim.errors import InputError
 from hdsim.sensitivity.analysis import check_outputs, convergence, indices
-from hdsim.sensitivity.checks import consistency_checks, failed_messages
+from hdsim.sensitivity.checks import consistency_checks, failed_messages, resolution_flags
 from hdsim.sensitivity.design import check_sizes
 from hdsim.sensitivity.evaluate import evaluate
 from hdsim.sensitivity.store import DONE, PENDING, open_store
@@ -152,7 +152,8 @@ def run_study(func, problem, n, *, seed=0, second_order=False, replicates=4, exe
                     break
         failures = _failure_records(store, n_stage)
         prefix = store.prefix_rows(n_stage)
-        conv = convergence(problem, store.read("Y", prefix), second_order=second_order,
+        outputs = store.read("Y", prefix)
+        conv = convergence(problem, outputs, second_order=second_order,
                            replicates=replicates,
                            evaluated=store.read("status", prefix) != PENDING,
                            conf_level=conf_level, num_resamples=num_resamples, seed=seed)
@@ -165,6 +166,11 @@ def run_study(func, problem, n, *, seed=0, second_order=False, replicates=4, exe
     _report_failures(failures, store, log)
     checks = consistency_checks(res["S1"], res["ST"], res["S1_conf_replicates"],
                                 res["ST_conf_replicates"], problem.names)
+    resolution = getattr(func, "resolution", None)  # a simulator says how finely it resolves its output
+    if callable(resolution):
+        flags = resolution_flags(outputs, resolution(outputs))
+        checks["flags"] += flags
+        checks["ok"] = checks["ok"] and not flags
     for line in failed_messages(checks):
         log(line)
     return StudyResult(problem, n_stage, bool(second_order), int(replicates), res, checks,
