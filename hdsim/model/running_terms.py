@@ -97,10 +97,6 @@ class RunningTerm(FamilyKnowledge):
     #: the unit of a column's amplitude where it is not a torque [N·m] (for reports)
     column_units: ClassVar[Mapping[str, str]] = MappingProxyType({})
 
-    def unit_of(self, column: str) -> str:
-        """The unit of the amplitude of ``column`` on the wave-generator shaft."""
-        return self.column_units.get(column, "N·m")
-
     def grid(self, speeds: np.ndarray) -> tuple[float, ...]:
         """Values of the term's non-linear parameter to try (``()``: none)."""
         return ()
