@@ -127,3 +127,23 @@ def test_a_nan_and_a_blank_line_in_a_long_log_keep_their_line_numbers(tmp_path, 
     path = _csv(tmp_path / "nan.csv", t, torque, nan)
     with pytest.raises(InputError, match="line 704"):
         numeric_parser.read_measurement_file(path, None)
+
+
+def test_a_breakaway_log_is_fitted_whole():
+    """A start from rest is a transient of a few rows; the noise check, a median, would not
+    see it thinned away, so a breakaway record keeps every row."""
+    import truth_breakaway
+
+    from hdsim.identification.breakaway import BreakawayTest
+    from hdsim.identification.workflow import prepare_record
+    from hdsim.io.measurement import make_measurement as make
+
+    assert not BreakawayTest.thinnable
+    cols, meta, _ = truth_breakaway.make_breakaway_data(seed=207)  # logged at 1 kHz
+    rows = len(cols["time_s"])
+    assert rows > 2 * MAX_ROWS  # long enough that a twist or sweep record would be thinned
+    meas = make("breakaway", cols["time_s"], cols["torque_Nm"], None, wg_angle=cols["wg_angle_rad"],
+                ratio=float(meta["ratio"]))
+    prepared, checks, data, _, _ = prepare_record(meas)
+    assert len(prepared) == rows and "logged_rows" not in data
+    assert not [c for c in checks if c["check"] == "thinned"]

@@ -190,6 +190,9 @@ class TestKind:
 
     #: the heading of a report's fitted-parameter table (a torque test names its shaft)
     parameters_heading: ClassVar[str] = "Fitted parameters"
+    #: a long log of this test may keep one row in k (`hdsim.io.decimation`): its content is
+    #: slow against the logging rate, which the noise check confirms row by row
+    thinnable: ClassVar[bool] = True
 
     def parameter_unit(self, result, name: str) -> str:
         """The unit of a fitted parameter of ``result`` for the report's table: the fitted

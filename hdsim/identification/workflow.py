@@ -52,7 +52,7 @@ def _examine(meas: Measurement, scale: DriveScale) -> tuple:
     meas, turned = kind.prepare(meas)
     imported = import_checks(meas)
     logged = len(meas)
-    meas, thinned = thin_record(meas)  # a long log: every k-th row, where the noise allows
+    meas, thinned = thin_record(meas) if kind.thinnable else (meas, [])  # a long log: one row in k
     checks, figures = kind.checks(meas, scale)
     checks = imported + list(turned) + thinned + list(checks)
     data = {"rows": len(meas), "dropped_rows": meas.rows.dropped_rows, **figures}
