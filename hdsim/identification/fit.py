@@ -328,8 +328,9 @@ def result_of(ev: Evaluator, prob: FitProblem, unit: str = "") -> FitResult:
         effect, linear = model.kinematic_error.from_linear(coef[1:])
         model = model.with_effects(kinematic_error=effect)
         updates.update({f"kinematic_error.{k}": v for k, v in linear.items()})
-    unc = uncertainty(ev, prob, r_rows[0])
-    coordinates = fitted_coordinates(prob, covariance(prob, r_rows[0]))
+    cov = covariance(prob, r_rows[0])
+    unc = uncertainty(ev, prob, r_rows[0], cov)
+    coordinates = fitted_coordinates(prob, cov)
     prediction = ev.y - full[0]
     effects = {f: getattr(model, f).id for f in SLOTS if not getattr(model, f).is_null}
     derived = {"K0_Nm_per_rad": float(np.asarray(model.base_stiffness).reshape(-1)[0])}

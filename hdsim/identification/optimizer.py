@@ -270,10 +270,11 @@ def covariance(prob: FitProblem, r: np.ndarray) -> np.ndarray | None:
         return None
 
 
-def uncertainty(ev: Evaluator, prob: FitProblem, r: np.ndarray) -> dict:
-    """1-sigma uncertainties from the Jacobian (offset column included), n_eff-widened."""
+def uncertainty(ev: Evaluator, prob: FitProblem, r: np.ndarray, cov: np.ndarray | None = None) -> dict:
+    """1-sigma uncertainties from the Jacobian (offset column included), n_eff-widened
+    (``cov``: `covariance`, when the caller has it already)."""
     out = {}
-    cov = covariance(prob, r)
+    cov = covariance(prob, r) if cov is None else cov
     if cov is None:
         return out
     sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
