@@ -187,3 +187,20 @@ def test_implausible_fits_are_named():
     sane = {"fitted": {"stiffness.K0": DRIVE.K_soft * 1.1, "friction.torque_max": 3.0},
             "uncertainty": {"stiffness.K0": 100.0, "friction.torque_max": 0.1}, "derived": {}}
     assert [c["status"] for c in plausibility(sane, DRIVE)] == ["ok"]
+
+
+def test_a_kinematic_error_record_at_few_samples_a_turn_has_its_encoders_noise_floor(truth_ke):
+    """29 samples per wave-generator turn: a period of the 4x order spans seven samples, the
+    window of the noise estimate, so the kinematic error is not locally cubic; the floor is
+    read once its WG orders are removed and comes out at the truth's encoder noise (white
+    noise plus the quantisation step over √12)."""
+    cols, tr = truth_ke
+    meas = make_measurement("kinematic_error", cols["time_s"], cols["torque_Nm"], cols["output_angle_rad"],
+                            wg_angle=cols["wg_angle_rad"], ratio=float(tr["meta"]["ratio"]))
+    noise = tr["measurement"]
+    expected = math.hypot(noise["noise_rad"], noise["quant_rad"] / math.sqrt(12.0))
+    turns = np.ptp(meas.wg_angle) / (2 * math.pi)
+    assert len(meas) / turns < 30  # few samples a turn
+    assert noise_level(meas.kinematic_error) > 5 * expected  # what the plain estimate gives
+    _, data, _ = examine(meas, DriveScale.of(load_unit()))
+    assert data["noise_floor_rad"] == pytest.approx(expected, rel=0.15)
