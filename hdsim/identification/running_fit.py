@@ -445,7 +445,11 @@ def fit_running(record, families=(), rows=None, widened=()) -> RunningFit:
 def _law_of(rec: SweepRecord, terms: list, owners: list, names: list, x: np.ndarray, nonlinear: dict):
     """The law with the amplitudes ``x`` written back, or None when a term cannot hold its
     amplitudes (`RunningTerm.holds`)."""
-    law = unit_law(rec.velocity_scale)
+    return _written_back(rec.velocity_scale, terms, owners, names, x, nonlinear)
+
+
+def _written_back(velocity_scale: float, terms, owners, names, x, nonlinear: dict):
+    law = unit_law(velocity_scale)
     for term in terms:
         coefficients = {n: float(v) for o, n, v in zip(owners, names, x) if o is term}
         if not term.holds(law, coefficients):
@@ -530,13 +534,7 @@ class SweepCoordinates:
 
     def law(self, x) -> InputFriction | None:
         """The law with amplitudes ``x``; None where a term cannot hold them."""
-        law = unit_law(self.velocity_scale)
-        for term in self.terms:
-            coefficients = {n: float(v) for o, n, v in zip(self.owners, self.names, x) if o is term}
-            if not term.holds(law, coefficients):
-                return None
-            law = term.write_back(law, coefficients, self.nonlinear.get(term.family))
-        return law
+        return _written_back(self.velocity_scale, self.terms, self.owners, self.names, x, self.nonlinear)
 
 
 def _owner_name(owner) -> str:
