@@ -147,11 +147,11 @@ COMBINATIONS = [dict(hardening=h, friction=f, damping=d, backlash=b)
 def test_the_engines_give_one_twist(effects):
     # the numpy loop of the sub-stepped Dahl slider costs ~3 ms a step: its comparison
     # stops after the first reversal, at the same step size
-    t, T = _profile(until=2.6 if isinstance(effects["friction"], fx.DahlSlip) else 6.0)
+    t, T = _profile(until=1.8 if isinstance(effects["friction"], fx.DahlSlip) else 6.0)
     model = _model(**effects)
     x_np, s_np = locked_twist(model, t, T, engine="numpy", return_states=True)
     x_c, s_c = locked_twist(model, t, T, engine="compiled", return_states=True)
-    assert np.ptp(x_np) > 3e-3  # a real ±T_N loop
+    assert np.ptp(x_np) > 1.5e-3  # a real loop: to T_N and back past its reversal
     np.testing.assert_allclose(x_c, x_np, rtol=0, atol=3e-9)  # Newton stop x_tol = 1e-8 rad
     if np.size(s_np):
         np.testing.assert_allclose(np.asarray(s_c), np.asarray(s_np), rtol=0, atol=1e-6 * max(np.ptp(s_np), 1.0))
