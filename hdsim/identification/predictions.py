@@ -114,31 +114,42 @@ def catalog_predictions(result, *, samples: int = SAMPLES, seed: int = 0) -> lis
         values = _metrics(model, coordinates, rows, scenario, [t[1] for t in wanted])
         if values is None:
             continue
-        for (_, metric, label, unit, scale), v in zip(wanted, values):
-            centre = float(v[0])
-            datasheet = catalog.get(DATASHEET_KEYS.get(metric, ""))
+        bands, nonlinear = {}, []
+        for (_, metric, *_), v in zip(wanted, values):
             if not k or not np.all(np.isfinite(v)):
-                out.append(Prediction(label, unit, centre * scale, np.nan, np.nan, datasheet, "no covariance"))
+                bands[metric] = (np.nan, np.nan, "no covariance")
                 continue
             first = (v[1:k + 1] - v[k + 1:]) / 2.0
-            second = v[1:k + 1] + v[k + 1:] - 2.0 * centre
-            if np.all(np.abs(second) <= NONLINEARITY * np.abs(first) + 1e-12 * abs(centre)):
+            second = v[1:k + 1] + v[k + 1:] - 2.0 * v[0]
+            if np.all(np.abs(second) <= NONLINEARITY * np.abs(first) + 1e-12 * abs(v[0])):
                 g = first / np.where(sd > 0, sd, 1.0)
                 half = Z95 * float(np.sqrt(max(g @ coordinates.covariance @ g, 0.0)))
-                out.append(Prediction(label, unit, centre * scale, (centre - half) * scale, (centre + half) * scale,
-                                      datasheet, "linearised"))
-                continue
-            draws = np.random.default_rng(seed).multivariate_normal(coordinates.u, coordinates.covariance,
-                                                                   size=samples, method="eigh")
-            sampled = _metrics(model, coordinates, draws, scenario, [metric])
-            kept = sampled[0][np.isfinite(sampled[0])] if sampled is not None else np.zeros(0)
-            if kept.size < samples // 2:
-                out.append(Prediction(label, unit, centre * scale, np.nan, np.nan, datasheet,
-                                      f"sampled ({kept.size} of {samples} draws ran: no band)"))
-                continue
+                bands[metric] = (v[0] - half, v[0] + half, "linearised")
+            else:
+                nonlinear.append(metric)
+        if nonlinear:  # one batch of draws for every metric of the test that needs them
+            bands.update(_sampled_bands(model, coordinates, scenario, nonlinear, samples, seed))
+        for (_, metric, label, unit, scale), v in zip(wanted, values):
+            low, high, method = bands[metric]
+            out.append(Prediction(label, unit, float(v[0]) * scale, low * scale, high * scale,
+                                  catalog.get(DATASHEET_KEYS.get(metric, "")), method))
+    return out
+
+
+def _sampled_bands(model, coordinates, scenario, metrics, samples, seed) -> dict:
+    """``{metric: (low, high, method)}`` from the 2.5-97.5 % quantiles of ``samples`` draws of
+    the coordinates, run as one batch."""
+    draws = np.random.default_rng(seed).multivariate_normal(coordinates.u, coordinates.covariance,
+                                                           size=samples, method="eigh")
+    sampled = _metrics(model, coordinates, draws, scenario, metrics)
+    out = {}
+    for i, metric in enumerate(metrics):
+        kept = sampled[i][np.isfinite(sampled[i])] if sampled is not None else np.zeros(0)
+        if kept.size < samples // 2:
+            out[metric] = (np.nan, np.nan, f"sampled ({kept.size} of {samples} draws ran: no band)")
+        else:
             low, high = np.quantile(kept, [0.025, 0.975])
-            out.append(Prediction(label, unit, centre * scale, low * scale, high * scale, datasheet,
-                                  f"sampled ({kept.size} of {samples} draws)"))
+            out[metric] = (float(low), float(high), f"sampled ({kept.size} of {samples} draws)")
     return out
 
 
@@ -178,24 +189,24 @@ def sweep_predictions(fit, scale) -> list[Prediction]:
         Running torque forward and reverse at 2000 rpm and the starting torque, on the
         input (wave-generator) shaft [N·m].
     """
-    grid = np.linspace(0.0, 2.0 * np.pi, 72, endpoint=False)
-    figures = [("running torque at 2000 rpm, forward", lambda law: float(np.mean(law.torque(
-                    np.full(grid.size, CATALOG_SPEED), grid))), getattr(scale, "running_torque", 0.0)),
-               ("running torque at 2000 rpm, reverse", lambda law: float(-np.mean(law.torque(
-                    np.full(grid.size, -CATALOG_SPEED), grid))), getattr(scale, "running_torque", 0.0)),
+    figures = [("running torque at 2000 rpm, forward", lambda law: float(law.running_torque(CATALOG_SPEED)),
+                getattr(scale, "running_torque", 0.0)),
+               ("running torque at 2000 rpm, reverse", lambda law: float(-law.running_torque(-CATALOG_SPEED)),
+                getattr(scale, "running_torque", 0.0)),
                ("starting torque", lambda law: float(law.starting_torque), getattr(scale, "starting_torque", 0.0))]
     coordinates = fit.coordinates
+    if coordinates is not None:  # the figures are linear in the amplitudes: one step of each
+        sd = np.sqrt(np.maximum(np.diag(coordinates.covariance), 0.0))
+        moved = {j: coordinates.law(coordinates.x + sd[j] * np.eye(sd.size)[j]) for j in np.flatnonzero(sd > 0)}
     out = []
     for label, figure, datasheet in figures:
         value = figure(fit.law)
         low = high = np.nan
         method = "no covariance"
         if coordinates is not None:
-            sd = np.sqrt(np.maximum(np.diag(coordinates.covariance), 0.0))
             g = np.zeros(sd.size)
-            for j in np.flatnonzero(sd > 0):  # the figure is linear in the amplitudes: one step each
-                moved = coordinates.law(coordinates.x + sd[j] * np.eye(sd.size)[j])
-                g[j] = np.nan if moved is None else (figure(moved) - value) / sd[j]
+            for j, law in moved.items():
+                g[j] = np.nan if law is None else (figure(law) - value) / sd[j]
             if np.all(np.isfinite(g)):
                 half = Z95 * float(np.sqrt(max(g @ coordinates.covariance @ g, 0.0)))
                 low, high, method = value - half, value + half, "linear in the amplitudes"
