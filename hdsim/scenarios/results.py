@@ -62,9 +62,8 @@ def write_run_file(path, run) -> Path:
     result = run.result
     with atomic_path(path) as tmp:
         with h5py.File(tmp, "w") as f:
-            evaluator = "quasistatic" if result.solver.get("method") == "quasistatic" else "dynamic"
             f.attrs.update(hdsim_version=__version__, unit=run.model.name, scenario=run.scenario.name,
-                           setup=result.setup, evaluator=evaluator,
+                           setup=result.setup,
                            created=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"))
             f.create_dataset("t", data=result.t).attrs["unit"] = "s"
             for group, table in (("states", result.states), ("signals", result.signals)):
@@ -124,10 +123,12 @@ def read_run_file(path) -> tuple[HarmonicDrive, Scenario, SimulationResult, dict
             metrics = {k: v[()] for k, v in f["metrics"].items()}
             params = {k: v[()] for k, v in f["params"].items()}
             attrs = dict(f.attrs)
+            solver = dict(f["solver"].attrs)
+            metadata = {k: attrs[k] for k in ("unit", "scenario", "hdsim_version", "created") if k in attrs}
+            # the solver's method names the evaluator that ran: not stored twice
+            metadata["evaluator"] = "quasistatic" if solver.get("method") == "quasistatic" else "dynamic"
             result = SimulationResult(t=f["t"][()], states=states, signals=signals, setup=str(attrs["setup"]),
-                                      solver=dict(f["solver"].attrs),
-                                      metadata={k: attrs[k] for k in ("unit", "scenario", "hdsim_version",
-                                                                      "created", "evaluator") if k in attrs})
+                                      solver=solver, metadata=metadata)
             effects = {k: str(v) for k, v in f["effects"].attrs.items()}
             scenario_toml = str(f["scenario"].attrs["toml"])
             unit = str(attrs["unit"])
