@@ -53,6 +53,20 @@ def run_in_processes(run_case, cases, workers: int, description: str, failed_row
     return rows
 
 
+def added_rates(rows: list, hidden) -> dict:
+    """What a group's diagnoses added against what its truth hid: ``runs``, ``errors`` (rows
+    whose ``added`` is None), ``first_pick`` (first addition a hidden family; None when
+    nothing is hidden), ``exactly_hidden`` and ``spurious`` (anything beyond the hidden),
+    the rates over all runs."""
+    hidden = set(hidden)
+    ok = [r for r in rows if r["added"] is not None]
+    first = [r for r in ok if r["added"][:1] and r["added"][0] in hidden]
+    return {"runs": len(rows), "errors": len(rows) - len(ok),
+            "first_pick": len(first) / len(rows) if hidden else None,
+            "exactly_hidden": sum(set(r["added"]) == hidden for r in ok) / len(rows),
+            "spurious": sum(bool(set(r["added"]) - hidden) for r in ok) / len(rows)}
+
+
 def write_json_atomic(path: Path, obj) -> None:
     """Write ``obj`` as indented JSON to ``path`` atomically (temporary file, then rename)."""
     from hdsim.atomic import write_text_atomic

@@ -29,7 +29,7 @@ sys.path.insert(0, str(HERE.parent / "tests"))  # truth_breakaway lives with the
 sys.path.insert(0, str(HERE.parent))
 sys.path.insert(0, str(HERE))
 
-from battery_common import battery_main  # noqa: E402
+from battery_common import added_rates, battery_main  # noqa: E402
 
 GROUPS = {"nothing": (), "asymmetry": ("asymmetry",), "friction": ("friction",),
           "two:asymmetry+friction": ("asymmetry", "friction")}
@@ -68,13 +68,7 @@ def table(rows: list) -> dict:
         mine = [r for r in rows if r["group"] == group]
         if not mine:
             continue
-        ok = [r for r in mine if r["added"] is not None]
-        first = [r for r in ok if hidden and r["added"][:1] and r["added"][0] in hidden]
-        both = [r for r in ok if set(r["added"]) == set(hidden)]
-        spurious = [r for r in ok if set(r["added"]) - set(hidden)]
-        out[group] = {"runs": len(mine), "errors": len(mine) - len(ok),
-                      "first_pick": len(first) / len(mine) if hidden else None,
-                      "exactly_hidden": len(both) / len(mine), "spurious": len(spurious) / len(mine),
+        out[group] = {**added_rates(mine, hidden),
                       "worst_starting_torque_error": max(r["starting_torque_error"] for r in mine)}
     return out
 

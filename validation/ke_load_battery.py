@@ -29,7 +29,7 @@ sys.path.insert(0, str(HERE.parent / "tests"))
 sys.path.insert(0, str(HERE.parent))
 sys.path.insert(0, str(HERE))
 
-from battery_common import battery_main  # noqa: E402
+from battery_common import added_rates, battery_main  # noqa: E402
 
 GROUPS = {f"{profile}{sign}": (profile, 1.0 if sign == "+" else -1.0)
           for profile in ("sine", "ramp", "opposing", "windup") for sign in "+-"}
@@ -62,10 +62,8 @@ def table(rows: list) -> dict:
     for group in GROUPS:
         mine = [r for r in rows if r["group"] == group]
         if mine:
-            ok = [r for r in mine if r["added"] is not None]
-            out[group] = {"runs": len(mine), "errors": len(mine) - len(ok),
-                          "first_pick": sum(r["added"][:1] == ["kinematic_error"] for r in ok) / len(mine),
-                          "spurious": sum(bool(set(r["added"]) - {"kinematic_error"}) for r in ok) / len(mine),
+            rates = added_rates(mine, {"kinematic_error"})
+            out[group] = {**{k: rates[k] for k in ("runs", "errors", "first_pick", "spurious")},
                           "worst_stiffness_error": max(r["stiffness_error"] for r in mine),
                           "worst_rms_over_noise": max(r["rms_over_noise"] for r in mine)}
     return out
