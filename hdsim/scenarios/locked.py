@@ -87,7 +87,15 @@ def _check_size(load: dict, samples_per_segment: int, source: str) -> None:
     if cycles > MAX_CYCLES:
         raise InputError(f"{source}: load.cycles = {cycles} (limit {MAX_CYCLES}): each cycle crosses the "
                          "dead zone twice and costs the solver ~100 steps")
-    refuse_if_too_large(source, samples=_samples(cycles, samples_per_segment), duration=_duration(load),
+    _refuse_if_too_large(source, load, samples_per_segment)
+
+
+def _refuse_if_too_large(source: str, load: dict, samples_per_segment: int, batch: int = 1,
+                         max_step: float | None = None) -> None:
+    """`refuse_if_too_large` for a torque cycle (``max_step``: the solver's bound, for its step count)."""
+    duration = _duration(load)
+    refuse_if_too_large(source, samples=_samples(load["cycles"], samples_per_segment), duration=duration,
+                        batch=batch, min_steps=0.0 if max_step is None else duration / max_step,
                         set_by="load.cycles, load.rate and output.samples_per_segment")
 
 
@@ -138,10 +146,7 @@ def run_locked(model: HarmonicDrive, scenario, *, samples_per_segment: int | Non
     """
     n = samples_per_segment or scenario.samples_per_segment
     options = ramp_step_bound(scenario, options)
-    duration = _duration(scenario.data["load"])
-    refuse_if_too_large(scenario.source, samples=_samples(scenario.data["load"]["cycles"], n), duration=duration,
-                        batch=model.batch_size, min_steps=duration / options.max_step,
-                        set_by="load.cycles, load.rate and output.samples_per_segment")
+    _refuse_if_too_large(scenario.source, scenario.data["load"], n, model.batch_size, options.max_step)
     rated = model.drive.rated_torque
     system = locked_wave_generator(model, scenario.torque_profile(rated))
     t_eval = scenario.sample_times(n)
@@ -221,9 +226,7 @@ def run_locked_quasistatic(model: HarmonicDrive, scenario, *, samples_per_segmen
     torque: no inertia).
     """
     n = samples_per_segment or scenario.samples_per_segment
-    load = scenario.data["load"]
-    refuse_if_too_large(scenario.source, samples=_samples(load["cycles"], n), duration=_duration(load),
-                        batch=model.batch_size, set_by="load.cycles, load.rate and output.samples_per_segment")
+    _refuse_if_too_large(scenario.source, scenario.data["load"], n, model.batch_size)
     every = int(np.ceil(QUASISTATIC_STEPS_PER_RAMP / n))
     steps = scenario.sample_times(n * every)
     shape = scenario.torque_profile(1.0)(steps)
