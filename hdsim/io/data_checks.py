@@ -201,13 +201,18 @@ def _without_wg_orders(kinematic_error, wg_angle, ratio) -> np.ndarray:
     in every drive, not a model's choice, so the floor stays the data's, whatever is fitted.
     """
     e = np.asarray(kinematic_error, dtype=float)
-    theta = np.asarray(wg_angle, dtype=float)
-    columns = [np.ones_like(theta)]
-    for k in range(1, WG_ORDERS + 1):
-        columns += [np.sin(k * theta), np.cos(k * theta)]
-    columns += [np.sin(theta / float(ratio)), np.cos(theta / float(ratio))]
-    A = np.column_stack(columns)
+    A = np.column_stack([np.ones_like(e), *_wg_order_columns(wg_angle, ratio, WG_ORDERS)])
     return e - A @ np.linalg.lstsq(A, e, rcond=None)[0]
+
+
+def _wg_order_columns(wg_angle, ratio, orders: int) -> list:
+    """cos and sin of the wave-generator orders 1 … ``orders`` and of the output's first
+    order: the part of a kinematic error that is periodic in the angles."""
+    wg = np.asarray(wg_angle, dtype=float)
+    columns = []
+    for phase in [k * wg for k in range(1, orders + 1)] + [wg / float(ratio)]:
+        columns += [np.cos(phase), np.sin(phase)]
+    return columns
 
 
 def _locked_identity(meas, T, drive: DriveScale) -> list[Check]:
@@ -283,10 +288,8 @@ def twist_slope(meas) -> tuple[float, float]:
     T = np.asarray(meas.torque, dtype=float)
     if meas.test == "kinematic_error":
         y = np.asarray(meas.kinematic_error, dtype=float)
-        wg = np.asarray(meas.wg_angle, dtype=float)
-        columns = [T, np.ones_like(T)]  # no drift term: the model has none, a ramped load would pass for one
-        for phase in [k * wg for k in (1, 2, 3, 4)] + [wg / meas.ratio]:
-            columns += [np.cos(phase), np.sin(phase)]
+        # no drift term: the model has none, a ramped load would pass for one
+        columns = [T, np.ones_like(T), *_wg_order_columns(meas.wg_angle, meas.ratio, 4)]
     else:
         y = np.asarray(meas.angle, dtype=float)
         columns = [T, np.ones_like(T)]
