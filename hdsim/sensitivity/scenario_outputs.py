@@ -305,11 +305,11 @@ def _single(drive) -> HarmonicDrive:
     return model
 
 
-def _check_output(model: HarmonicDrive, scenario: Scenario, output: str) -> None:
-    """Run the nominal drive once: a metric the scenario does not report is refused here,
-    not after every row of the study has failed on it."""
+def _check_output(model: HarmonicDrive, scenario: Scenario, output: str, evaluator: str = "dynamic") -> None:
+    """Run the nominal drive once, through the study's evaluator: a metric the scenario does
+    not report is refused here, not after every row of the study has failed on it."""
     run = run_scenario(model, scenario, options=STUDY_SOLVER,
-                       samples_per_segment=STUDY_SAMPLES.get(scenario.name))
+                       samples_per_segment=STUDY_SAMPLES.get(scenario.name), evaluator=evaluator)
     if output not in run.metrics:
         raise unknown_name(f"output metric of scenario {scenario.name}", output, run.metrics)
 
@@ -370,7 +370,7 @@ def model_function(drive, names, output: str, scenario=None, evaluator: str = "a
     model = _single(drive)
     choice = choose_evaluator(get_setup(resolved.setup), model, resolved, evaluator)
     if not (isinstance(scenario, str) and METRIC_SCENARIOS.get(output) == scenario):
-        _check_output(model, resolved, output)
+        _check_output(model, resolved, output, choice.chosen)
     # a unit given by name travels by name: workers load it from their own cache
     return ScenarioMetric(drive if isinstance(drive, str) else model,
                           tuple(resolve_names(model, names)), output, resolved,
