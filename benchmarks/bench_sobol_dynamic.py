@@ -3,7 +3,8 @@
 Three flexspline dimensions within ±10 %, N = 64 (320 runs of the contract kinematic-error
 scenario ``kinematic_error.toml``, 1 output revolution each way at 500 rpm under a
 quarter of T_N) on 2 local workers, as ``hdsim sobol --output
-transmission_accuracy_arcsec`` runs it: wall time per run. Then, in the same process, the
+transmission_accuracy_arcsec`` runs it (``evaluator="auto"``: the driven bench's quasi-static
+evaluator where its criterion holds, as it does here): wall time per run. Then, in the same process, the
 cost of one driven run on its own (the same scenario and solver options, one
 ``solve_ivp`` per parameter set), for the ratio the batching buys.
 

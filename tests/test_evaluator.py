@@ -73,11 +73,17 @@ def test_auto_keeps_the_dynamic_model_where_the_criterion_fails():
     assert choice.chosen == "dynamic" and choice.reason == reason
 
 
-def test_the_driven_bench_has_no_quasistatic_evaluator():
+def test_a_bench_without_a_quasistatic_evaluator_is_refused_it():
+    """Both benches bring one; a bench registered without one (a user's) keeps the dynamic
+    model under "auto" and refuses "quasistatic" in one line."""
+    from dataclasses import replace
+
     unit = load_unit("CSG-25-100")
     scenario = load_scenario(builtin_scenario_path("kinematic_error"))
+    bare = replace(get_setup(scenario.setup), quasistatic_runner=None, quasistatic_criterion=None)
     with pytest.raises(InputError, match="no quasi-static evaluator"):
-        run_scenario(unit, scenario, evaluator="quasistatic")
+        choose_evaluator(bare, unit, scenario, "quasistatic")
+    assert choose_evaluator(bare, unit, scenario, "auto").chosen == "dynamic"
     with pytest.raises(InputError, match="evaluator"):
         run_scenario(unit, "lost_motion", evaluator="fast")
 

@@ -28,10 +28,11 @@ from hdsim.scenarios.profile_csv import read_profile_csv
 from hdsim.scenarios.setups import Setup
 from hdsim.simulation.controller import PIController
 from hdsim.simulation.driven import SETUP, Bench, scalar_ratio
+from hdsim.simulation.driven_quasistatic import criterion, driven_signals
 from hdsim.simulation.loads import NO_LOAD, csv_load, opposing_load, ramped_load, step_load, sweep_load
 from hdsim.simulation.motion import (constant_speed_motion, csv_motion, hold_motion, reversal_motion, sine_motion,
                                      sweep_motion, trapezoid_motion)
-from hdsim.simulation.solver import SolverOptions, integrate_segments, step_schedule
+from hdsim.simulation.solver import SimulationResult, SolverOptions, integrate_segments, step_schedule
 from hdsim.units import rpm_to_rad_per_s
 
 TWO_PI = 2.0 * np.pi
@@ -254,5 +255,32 @@ def run_driven(model: HarmonicDrive, scenario, *, samples_per_segment: int | Non
     return scenario, result, metrics
 
 
+def run_driven_quasistatic(model: HarmonicDrive, scenario, *, samples_per_segment: int | None = None,
+                           options: SolverOptions | None = None):
+    """Run a driven scenario with the twist's inertia dropped (`Setup.quasistatic_runner`).
+
+    The signals come from `hdsim.simulation.driven_quasistatic.driven_signals` at the output
+    samples; ``options`` (the ``solve_ivp`` tolerances) do not apply. Arguments and return
+    as `run_driven`; the result has no ODE states.
+    """
+    if samples_per_segment:
+        scenario = scenario.with_updates({"output.samples_per_wg_rev": int(samples_per_segment)})
+    bench = bench_from_scenario(model, scenario)
+    t_eval = bench.sample_times()
+    refuse_if_too_large(scenario.source, samples=t_eval.size, duration=bench.t_end, batch=model.batch_size,
+                        min_steps=t_eval.size, set_by="the input and load durations and the output sampling")
+    result = SimulationResult(t=t_eval, states={}, signals=driven_signals(model, bench, t_eval), setup=SETUP,
+                              solver={"method": "quasistatic"})
+    result.metadata.update(windows={k: [float(a), float(b)] for k, (a, b) in bench.motion.windows.items()},
+                           input_mode=bench.mode, profile=bench.motion.description)
+    return scenario, result, driven_metrics(model, scenario, bench, result)
+
+
+def quasistatic_criterion(model: HarmonicDrive, scenario):
+    """`hdsim.simulation.driven_quasistatic.criterion` on the scenario's bench (`Setup.quasistatic_criterion`)."""
+    return criterion(model, bench_from_scenario(model, scenario))
+
+
 DRIVEN = Setup(name=SETUP, schema=DRIVEN_SCHEMA, required=DRIVEN_REQUIRED, runner=run_driven,
-               metrics=DRIVEN_METRICS)
+               metrics=DRIVEN_METRICS, quasistatic_runner=run_driven_quasistatic,
+               quasistatic_criterion=quasistatic_criterion)

@@ -17,7 +17,7 @@ from hdsim.scenarios.locked_metrics import METRIC_GROUPS, locked_metrics
 from hdsim.scenarios.setups import Setup
 from hdsim.simulation.driven import sample_model
 from hdsim.simulation.path import locked_wave_generator
-from hdsim.simulation.quasistatic import locked_twist
+from hdsim.simulation.quasistatic import first_mode_period, locked_twist
 from hdsim.simulation.solver import SimulationResult, SolverOptions, integrate
 
 LOCKED_SETUP = "locked_wave_generator"
@@ -177,18 +177,10 @@ QUASISTATIC_STEPS_PER_RAMP = 4
 
 
 def first_period(model: HarmonicDrive, amplitude: float) -> float:
-    """Period [s] of the output's torsional mode at its stiffest over a ±amplitude·T_N cycle.
-
-    ``2π √(J_out / K_max)`` with ``K_max`` the largest tangent of the hardening law up to
-    twice the twist the base stiffness gives at the amplitude (the law hardens, so the
-    real twist is smaller); the shortest period of a batch.
-    """
-    c_struct, c_mesh = model.split()
-    k0 = 1.0 / (np.asarray(c_struct, dtype=float) + np.asarray(c_mesh, dtype=float))
-    reach = 2.0 * amplitude * np.asarray(model.drive.rated_torque, dtype=float) / k0
-    twist = np.linspace(0.0, 1.0, 33)[:, None] * np.atleast_1d(reach)[None, :]
-    k_max = float(np.max(np.abs(model.hardening.tangent(twist, c_struct, c_mesh))))
-    return float(2.0 * np.pi * np.sqrt(np.min(np.asarray(model.drive.J_out, dtype=float)) / k_max))
+    """Period [s] of the output's torsional mode at its stiffest over a ±amplitude·T_N cycle
+    (`hdsim.simulation.quasistatic.first_mode_period` with the output's own inertia)."""
+    return first_mode_period(model, amplitude * np.asarray(model.drive.rated_torque, dtype=float),
+                             np.asarray(model.drive.J_out, dtype=float))
 
 
 def quasistatic_criterion(model: HarmonicDrive, scenario):

@@ -4,8 +4,10 @@
 ``f(X)`` that maps a matrix of parameter rows ``(n, d)`` to the metric ``(n,)``: the
 rows become one *batch* model (array-valued parameters) integrated in a single
 ``solve_ivp`` call, so the Python and solver overhead is paid once per chunk, not per
-row (the locked bench's ±4 % lost-motion test goes through the quasi-static evaluator
-instead when `hdsim.scenarios.locked.quasistatic_criterion` holds, ``evaluator="auto"``).
+row (under ``evaluator="auto"`` a scenario goes through its bench's quasi-static evaluator
+instead where the bench's criterion holds: the locked bench's ±4 % lost-motion test,
+`hdsim.scenarios.locked.quasistatic_criterion`, and the driven bench's kinematic-error
+runs, `hdsim.simulation.driven_quasistatic.criterion`).
 The drive is any `HarmonicDrive` (a built-in unit, a modified or a fitted one)
 or the name of a built-in unit; the scenario is a built-in name, a scenario file or a
 `Scenario`. Both travel to the workers inside the callable (they pickle). Rows whose

@@ -69,7 +69,7 @@ from hdsim.model import effects as fx
 from hdsim.model.drive import SLOTS, HarmonicDrive
 
 __all__ = ["UnsupportedEffect", "Plan", "stack_models", "stackable_groups", "locked_twist",
-           "dynamic_locked_twist", "sample_grid"]
+           "dynamic_locked_twist", "sample_grid", "first_mode_period"]
 
 
 #: how the step loop runs (`locked_twist`'s ``engine``)
@@ -450,6 +450,31 @@ def sample_grid(time, torque, max_steps: int = 4000, zero_band: float = 0.04):
     if chosen.size > max_steps:
         chosen = np.unique(np.concatenate([chosen[:: int(np.ceil(chosen.size / max_steps))], [n - 1]]))
     return chosen
+
+
+def first_mode_period(model: HarmonicDrive, torque, inertia) -> float:
+    """Period [s] of the output's torsional mode at its stiffest up to a torque: the time scale
+    the quasi-static evaluator may drop.
+
+    ``2π √(J / K_max)`` with ``K_max`` the largest tangent of the hardening law up to twice
+    the twist the base stiffness gives at ``torque`` (the law hardens, so the real twist is
+    smaller); the shortest period of a batch.
+
+    Parameters
+    ----------
+    model : HarmonicDrive
+        Single or batch model.
+    torque : float or array_like
+        Largest torque the path carries [N·m], per parameter set.
+    inertia : float or array_like
+        Inertia on the output [kg·m²] (the drive's ``J_out`` plus any load), per parameter set.
+    """
+    c_struct, c_mesh = model.split()
+    k0 = 1.0 / (np.asarray(c_struct, dtype=float) + np.asarray(c_mesh, dtype=float))
+    reach = 2.0 * np.abs(np.asarray(torque, dtype=float)) / k0
+    twist = np.linspace(0.0, 1.0, 33)[:, None] * np.atleast_1d(reach)[None, :]
+    k_max = float(np.max(np.abs(model.hardening.tangent(twist, c_struct, c_mesh))))
+    return float(2.0 * np.pi * np.sqrt(np.min(np.asarray(inertia, dtype=float)) / k_max))
 
 
 # --------------------------------------------------------------------------- reference
