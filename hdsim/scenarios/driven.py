@@ -281,6 +281,11 @@ def quasistatic_criterion(model: HarmonicDrive, scenario):
     return criterion(model, bench_from_scenario(model, scenario))
 
 
+def output_samples(model: HarmonicDrive, scenario) -> int:
+    """Output samples of one run of the scenario (`Setup.output_samples`)."""
+    return int(bench_from_scenario(model, scenario).sample_times().size)
+
+
 DRIVEN = Setup(name=SETUP, schema=DRIVEN_SCHEMA, required=DRIVEN_REQUIRED, runner=run_driven,
                metrics=DRIVEN_METRICS, quasistatic_runner=run_driven_quasistatic,
-               quasistatic_criterion=quasistatic_criterion)
+               quasistatic_criterion=quasistatic_criterion, output_samples=output_samples)

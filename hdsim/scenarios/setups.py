@@ -45,6 +45,10 @@ class Setup:
         ``criterion(model, scenario) -> (holds, reason, figures)``: whether the
         quasi-static runner reproduces the dynamic one on this scenario, one sentence
         why, and the numbers compared.
+    output_samples : callable, optional
+        ``output_samples(model, scenario) -> int``: the samples of one parameter set's run,
+        for a bench whose runs are long (a study then sends fewer rows per task, so its
+        memory stays bounded); None for a bench whose runs are short.
     """
 
     name: str
@@ -55,3 +59,4 @@ class Setup:
     check: Callable | None = None
     quasistatic_runner: Callable | None = None
     quasistatic_criterion: Callable | None = None
+    output_samples: Callable | None = None

@@ -271,6 +271,8 @@ def evaluate(func, X, executor=None, *, workers=2, chunksize=None, rows=None,
     out = Evaluation(np.full(n, np.nan), np.zeros(n, np.uint64), np.zeros(n, bool))
     # a model may say what chunk suits it (the simulator batches rows inside one solve)
     size = int(chunksize or getattr(func, "chunksize", None) or default_chunksize(n))
+    if executor is None and workers > 1:  # a small design still reaches every local worker
+        size = min(size, max(1, -(-n // workers)))
     spans = [(s, min(s + size, n)) for s in range(0, n, size)]
     bar = _progress(n, progress)
     try:

@@ -53,6 +53,12 @@ METRIC_SCENARIOS = {
 STUDY_SOLVER = SolverOptions(rtol=1e-4, atol_scale=1e-4)
 STUDY_SAMPLES = {"lost_motion": 1, "stiffness": 40}
 
+#: a task's run holds about this many bytes per output sample and parameter set (the
+#: signals, the solver's states and the intermediate arrays of the metrics) …
+BYTES_PER_SAMPLE_AND_ROW = 320
+#: … and a task stays within this much (a driven contract run of 26,000 samples: 30 rows)
+TASK_BYTES = 256e6
+
 
 def as_drive(drive) -> HarmonicDrive:
     """The model to study: a `HarmonicDrive` as it is, a name (or None) through `load_unit`.
@@ -376,4 +382,13 @@ def model_function(drive, names, output: str, scenario=None, evaluator: str = "a
     # a unit given by name travels by name: workers load it from their own cache
     return ScenarioMetric(drive if isinstance(drive, str) else model,
                           tuple(resolve_names(model, names)), output, resolved,
-                          evaluator=choice.chosen, choice=choice.as_dict())
+                          chunksize=task_rows(model, resolved), evaluator=choice.chosen, choice=choice.as_dict())
+
+
+def task_rows(model: HarmonicDrive, scenario: Scenario, limit: int = 1024) -> int:
+    """Rows per study task: ``limit``, or fewer where one run is long, so that a task's
+    memory stays within `TASK_BYTES` whatever the size of the design."""
+    count = get_setup(scenario.setup).output_samples
+    if count is None:
+        return limit
+    return int(np.clip(TASK_BYTES // (BYTES_PER_SAMPLE_AND_ROW * count(model, scenario)), 1, limit))

@@ -105,7 +105,8 @@ def _rigid_pass(model: HarmonicDrive, bench: Bench, t: np.ndarray) -> dict:
     J_out = per_sample(np.asarray(model.drive.J_out, dtype=float) + float(bench.load_inertia))
     torque = (T_L - J_out * a_o) / (1.0 - e_o)
     slow = T_L - J_out * a_w / N  # the load and the commanded motion's inertia, without the error's ripple
-    return dict(th_w=th_w, w_w=w_w, a_w=a_w, frac=frac, e=e, e_accel=e_accel, T_L=T_L, torque=torque, slow=slow)
+    return dict(th_w=th_w, w_w=w_w, a_w=a_w, frac=frac, e=e, e_w=e_w, e_o=e_o, e_accel=e_accel, T_L=T_L,
+                torque=torque, slow=slow)
 
 
 def step_grid(slow_torque: np.ndarray, step: float, max_gap: int) -> np.ndarray:
@@ -167,12 +168,12 @@ def driven_signals(model: HarmonicDrive, bench: Bench, t: np.ndarray) -> dict:
     twist, states = _twist(model, t, rigid["torque"], rigid["slow"])
     delta = twist.T
     th_w, w_w = rigid["th_w"], rigid["w_w"]
-    # the error at the output's actual angle (the twist moves it by ~1e-3 rad: e_o δ ~ 1e-7 of e)
-    e, e_w, _, _ = model.kinematic_error.displacement_and_partials(th_w, th_w / N + rigid["e"] + delta,
-                                                                   rigid["frac"])
+    # the error at the output's actual angle, to first order: the twist moves the output by
+    # ~1e-3 rad, and e_o δ is ~1e-7 of e (the second order, and δ's effect on e_w, far below)
+    e = rigid["e"] + rigid["e_o"] * delta
     q = e + delta
     tau = rigid["torque"]
-    wg_force = tau * (1.0 / N + e_w)
+    wg_force = tau * (1.0 / N + rigid["e_w"])
     friction = bench.input_friction
     T_f = friction.torque(w_w, th_w, wg_force) if friction is not NO_INPUT_FRICTION else 0.0 * tau
     J_in = per_sample(model.drive.J_in)
