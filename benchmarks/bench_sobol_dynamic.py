@@ -4,11 +4,12 @@ Three flexspline dimensions within ±10 %, N = 64 (320 runs of the contract kine
 scenario ``kinematic_error.toml``, 1 output revolution each way at 500 rpm under a
 quarter of T_N) on 2 local workers, as ``hdsim sobol --output
 transmission_accuracy_arcsec`` runs it (``evaluator="auto"``: the driven bench's quasi-static
-evaluator where its criterion holds, as it does here): wall time per run. Then, in the same process, the
-cost of one driven run on its own (the same scenario and solver options, one
-``solve_ivp`` per parameter set), for the ratio the batching buys.
+evaluator where its criterion holds, as it does here): wall time per run. Then, in the same
+run, the reference: the same study through ``solve_ivp`` (``evaluator="dynamic"``), and one
+driven run on its own (the same scenario and solver options, one ``solve_ivp`` per
+parameter set), for the ratios.
 
-    python benchmarks/bench_sobol_dynamic.py [--n 64] [--workers 2] [--single 2]
+    python benchmarks/bench_sobol_dynamic.py [--n 64] [--workers 2] [--single 2] [--no-reference]
 """
 
 from __future__ import annotations
@@ -32,16 +33,23 @@ def main() -> None:
     parser.add_argument("--n", type=int, default=64)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--single", type=int, default=2, help="single runs timed for the ratio")
+    parser.add_argument("--no-reference", action="store_true", help="skip the solve_ivp study (~30 s)")
     args = parser.parse_args()
 
-    t0 = time.perf_counter()
-    study = hdsim.sobol("CSG-25-100", NAMES, OUTPUT, n=args.n, workers=args.workers, progress=False)
-    wall = time.perf_counter() - t0
-    per_run = wall / study.evaluations
-    print(f"study: {OUTPUT}, {len(NAMES)} parameters, N={args.n}, {study.evaluations} runs, "
-          f"{args.workers} workers: {wall:.1f} s, {per_run * 1e3:.0f} ms of wall time per run "
-          f"(evaluator: {study.extra['evaluator']['chosen']})")
-    print("  ST", {n: round(float(v), 3) for n, v in zip(NAMES, study.analysis["ST"])})
+    walls = {}
+    for evaluator in ("auto",) if args.no_reference else ("auto", "dynamic"):
+        t0 = time.perf_counter()
+        study = hdsim.sobol("CSG-25-100", NAMES, OUTPUT, n=args.n, workers=args.workers, progress=False,
+                            evaluator=evaluator)
+        walls[evaluator] = wall = time.perf_counter() - t0
+        per_run = wall / study.evaluations
+        print(f"study: {OUTPUT}, {len(NAMES)} parameters, N={args.n}, {study.evaluations} runs, "
+              f"{args.workers} workers: {wall:.1f} s, {per_run * 1e3:.0f} ms of wall time per run "
+              f"(evaluator: {study.extra['evaluator']['chosen']})")
+        print("  ST", {n: round(float(v), 3) for n, v in zip(NAMES, study.analysis["ST"])})
+    if "dynamic" in walls:
+        print(f"the solve_ivp study takes {walls['dynamic'] / walls['auto']:.1f}x the wall time")
+    per_run = walls["auto"] / study.evaluations
 
     unit = load_unit("CSG-25-100")
     nominal = unit.params()

@@ -3,12 +3,12 @@
 Session fixtures (each built on first use, then reused by every test that asks):
 
 - ``ke_run``: the shipped ``kinematic_error.toml`` on CSG-25-100 (the contract scenario,
-  ~5 s); used by the physics checks, the figure checks and the result-file checks.
+  ~7 s); used only by the checks of the contract scenario's numbers (test_driven_physics.py).
 - ``default_lost_motion_run``, ``default_stiffness_run``: the shipped ±4 % T_N lost-motion
   and ±T_N stiffness scenarios on the default unit with its default effects.
 - ``short_ke_run``: the contract scenario on CSG-25-100 shortened to 0.02 output
-  revolutions each way (``SHORT_KE``); used by the brake check and the driven ``simulate``
-  verb's output check.
+  revolutions each way (``SHORT_KE``); used by the brake check, the driven figure check
+  and the driven ``simulate`` verb's output check.
 - ``truth_stiffness``, ``truth_ke``: one independent truth measurement each
   (``tests/truth.py``, which shares no code with hdsim) as ``(columns, truth)``.
 

@@ -10,6 +10,7 @@ each other, and no module reaches itself again through its imports (no import cy
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 import pytest
@@ -27,6 +28,13 @@ def _modules():
     for path in sorted(PACKAGE.rglob("*.py")):
         parts = path.relative_to(PACKAGE).with_suffix("").parts
         yield path, parts
+
+
+@functools.lru_cache(maxsize=None)
+def _parsed(path) -> ast.AST:
+    """A module's syntax tree, parsed once per session (the layer, cycle and sibling checks
+    all read every module; the trees are only read)."""
+    return ast.parse(path.read_text(encoding="utf-8"))
 
 
 def _layer(parts) -> int | None:
@@ -63,7 +71,7 @@ def test_imports_point_down_the_layers():
         own = _layer(parts)
         if own is None:  # hdsim/__init__.py (the facade) and __main__ may use every layer
             continue
-        tree = ast.parse(path.read_text(encoding="utf-8"))
+        tree = _parsed(path)
         for line, module in _imported(tree, parts):
             target = _layer(module)
             if target is not None and target > own:
@@ -101,7 +109,7 @@ def _import_graph() -> dict[tuple[str, ...], dict[tuple[str, ...], int]]:
     graph = {}
     for name, (path, parts) in files.items():
         edges: dict[tuple[str, ...], int] = {}
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        for node in ast.walk(_parsed(path)):
             if isinstance(node, ast.ImportFrom):
                 if node.level:  # relative: against the module's package
                     base = tuple(parts[:-node.level]) + (tuple(node.module.split(".")) if node.module else ())

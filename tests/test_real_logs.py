@@ -163,11 +163,17 @@ def test_the_answer_does_not_depend_on_the_unit_named(record):
         assert large.internal[name] == pytest.approx(value, rel=1e-3), name
 
 
-def test_the_whole_workflow_from_python_is_what_the_command_prints(record, tmp_path, cli):
+def test_the_whole_workflow_from_python_is_what_the_command_prints(record, tmp_path, cli, monkeypatch):
     """Contracts §6 from Python on a log with a current-derived torque and the output in
     revolutions: the import options as keywords, then `hdsim.diagnose` with the outcome,
-    the checks, the next measurement, the JSON of ``--json`` and the report page."""
+    the checks, the next measurement, the JSON of ``--json`` and the report page.
+
+    The command reads the file with its own options and asks for the same diagnosis; it
+    gets the Python one (after checking it read the same samples and asked with the same
+    arguments) instead of running the deterministic procedure a second time."""
     import hdsim
+    from hdsim.identification import workflow
+    from hdsim.identification.fit import parse_effects
 
     path = _write(tmp_path / "drive.csv", ["t", "iq_A", "pos_rev"],
                   [record["time_s"], _current(record["torque_Nm"], 0.05), record["angle_rad"] / (2 * math.pi)])
@@ -183,9 +189,23 @@ def test_the_whole_workflow_from_python_is_what_the_command_prints(record, tmp_p
     assert page.name == "index.html" and page.exists()
     j = result.to_json()
     assert j["outcome"] == result.outcome and j["checks"] == result.checks and j["report"] == str(page)
+    asked = []
+
+    def shared_diagnose(measurement, effects=None, *, unit=None, families=None, candidates=None,
+                        max_rounds=None, max_steps=None, log=None):
+        assert measurement.test == meas.test and effects == parse_effects("friction")  # --effects friction, parsed
+        assert (unit, families, candidates, max_rounds, max_steps) == (None,) * 5  # hdsim.diagnose's defaults
+        for name in ("time", "torque", "angle"):  # the command read the file as Python did
+            np.testing.assert_array_equal(getattr(measurement, name), getattr(meas, name), err_msg=name)
+        assert measurement.rated_torque == meas.rated_torque and measurement.ratio == meas.ratio
+        asked.append(measurement.source)
+        return result
+
+    monkeypatch.setattr(workflow, "diagnose", shared_diagnose)
     code, printed, err = _run(cli, tmp_path, "diagnose", path, "--test", "stiffness", "--columns",
                               MAP.format(k=K_T), "--effects", "friction", "--json")
     assert code == 0
+    assert len(asked) == 1
     for key in ("test", "outcome", "next_measurement", "added", "ambiguous", "checks", "data"):
         assert printed[key] == j[key], key
     assert [c["family"] for c in printed["ranking"]] == [c["family"] for c in j["ranking"]]
