@@ -182,15 +182,15 @@ def _extras(args, model, analytic, names, result) -> dict:
 
 def _write_outputs(args, summary, result, analytic, target) -> None:
     """Figures and the JSON summary: into ``--report DIR`` or next to ``--out``."""
-    from hdsim.atomic import write_text_atomic
-    from hdsim.plotting.sensitivity import plot_convergence, plot_indices
-
     if args.report:
         folder, stem = Path(args.report), "sobol"
     elif args.out:
         folder, stem = Path(args.out).parent, Path(args.out).stem
     else:
         return
+    from hdsim.atomic import write_text_atomic
+    from hdsim.plotting.sensitivity import plot_convergence, plot_indices
+
     names = list(result.problem.names)
     figs = [plot_indices(folder / f"{stem}_indices.png", names, result.analysis, analytic,
                          title=f"{summary['output']}: N = {result.n}")]

@@ -56,8 +56,10 @@ STUDY_SAMPLES = {"lost_motion": 1, "stiffness": 40}
 #: a task's run holds about this many bytes per output sample and parameter set (the
 #: signals, the solver's states and the intermediate arrays of the metrics) …
 BYTES_PER_SAMPLE_AND_ROW = 320
-#: … and a task stays within this much (a driven contract run of 26,000 samples: 30 rows)
-TASK_BYTES = 256e6
+#: … and a task stays within this much: 120 rows of the driven contract run (26,000
+#: samples). Not less: a batch through solve_ivp costs about the same for 8 rows as for
+#: 60 (the steps are shared), so smaller tasks cost the dynamic evaluator per row
+TASK_BYTES = 1e9
 
 
 def as_drive(drive) -> HarmonicDrive:
