@@ -3,6 +3,7 @@
     python docs/make_sensitivity_figures.py            # closed forms (about 10 s)
     python docs/make_sensitivity_figures.py --unit     # plus the flexspline study
     python docs/make_sensitivity_figures.py --evaluators   # quasi-static against solve_ivp (~1 min)
+    python docs/make_sensitivity_figures.py --driven       # the same on the driven contract run (~15 s)
 
 The flexspline figure needs the simulator's batch interface (``hdsim.sensitivity.scenario_outputs``).
 """
@@ -126,14 +127,64 @@ def evaluators() -> None:
     print(json.dumps(summary, indent=1))
 
 
+def driven() -> None:
+    """The contract kinematic-error run through both evaluators: the deviation over each
+    measured pass and the difference, with the metrics side by side."""
+    import json
+    import time
+
+    from hdsim.model.catalog import load_unit
+    from hdsim.scenarios.run import run_scenario
+    from hdsim.units import rad_to_arcsec
+
+    unit = load_unit("CSG-25-100")
+    runs, seconds = {}, {}
+    for ev in ("dynamic", "quasistatic"):
+        t0 = time.perf_counter()
+        runs[ev] = run_scenario(unit, "kinematic_error", evaluator=ev)
+        seconds[ev] = time.perf_counter() - t0
+    t = runs["dynamic"].result.t
+    fig = Figure(figsize=(9.0, 3.6))
+    left, right = fig.subplots(1, 2)
+    for name, (a, b) in runs["dynamic"].result.metadata["windows"].items():
+        inside = (t >= a) & (t <= b)
+        wg = np.rad2deg(runs["dynamic"].result.signals["wg_angle_rad"][0, inside] / 100.0)
+        q = {ev: rad_to_arcsec(runs[ev].result.signals["deviation_rad"][0, inside]) for ev in runs}
+        left.plot(wg, q["dynamic"], lw=0.8, label=f"{name}, solve_ivp")
+        left.plot(wg, q["quasistatic"], lw=0.8, ls="--", label=f"{name}, quasi-static")
+        right.plot(wg, q["quasistatic"] - q["dynamic"], lw=0.8, label=name)
+    left.set_xlabel("output angle [deg]")
+    left.set_ylabel("deviation θ_out − θ_WG/N [arcsec]")
+    left.set_title(f"contract run: solve_ivp {seconds['dynamic']:.1f} s, quasi-static {seconds['quasistatic']:.2f} s",
+                   fontsize=9)
+    left.legend(fontsize=7, frameon=False, ncol=2)
+    right.axhspan(-0.1, 0.1, color="0.9", zorder=0, label="±0.1 arcsec (the agreement asked for)")
+    right.set_xlabel("output angle [deg]")
+    right.set_ylabel("quasi-static − solve_ivp [arcsec]")
+    names = ("transmission_accuracy_arcsec", "lost_motion_on_reversal_arcsec", "windup_arcsec")
+    metrics = {n: {ev: round(float(runs[ev].metric(n)), 4) for ev in runs} for n in names}
+    right.set_title("TA {0[dynamic]:.3f} / {0[quasistatic]:.3f} arcsec".format(metrics[names[0]]), fontsize=9)
+    right.legend(fontsize=8, frameon=False)
+    fig.tight_layout()
+    save_figure(fig, FIGURES / "driven_evaluator_agreement.png")
+    summary = {"metrics": metrics, "seconds": {k: round(v, 2) for k, v in seconds.items()}}
+    (FIGURES / "driven_evaluator_agreement.json").write_text(json.dumps(summary, indent=1) + "\n")
+    print(json.dumps(summary, indent=1))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--unit", action="store_true", help="also run the flexspline study")
     ap.add_argument("--evaluators", action="store_true",
                     help="only the agreement of the quasi-static evaluator with solve_ivp")
+    ap.add_argument("--driven", action="store_true",
+                    help="only the agreement of the driven bench's quasi-static evaluator with solve_ivp")
     args = ap.parse_args()
-    if args.evaluators:
-        evaluators()
+    if args.evaluators or args.driven:
+        if args.evaluators:
+            evaluators()
+        if args.driven:
+            driven()
         return
     closed_forms()
     pairing()
