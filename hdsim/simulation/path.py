@@ -65,6 +65,8 @@ class ElasticPath:
         # stiffness at zero twist: the dead zone's stiffness in contact and the damping reference
         object.__setattr__(self, "base_tangent", model.hardening.tangent(0.0, c_struct, c_mesh))
         object.__setattr__(self, "n_friction", len(model.friction.state_names))
+        # asked at every evaluation of the right-hand side; the effect does not change
+        object.__setattr__(self, "damping_follows_stiffness", model.damping.follows_stiffness)
 
     @property
     def states(self) -> tuple[str, ...]:
@@ -87,7 +89,7 @@ class ElasticPath:
     def damping_coefficient(self, spring_tangent):
         """Damping coefficient [N·m·s/rad] of the body where the spring's tangent is ``spring_tangent``."""
         damping = self.model.damping
-        if not damping.follows_stiffness:
+        if not self.damping_follows_stiffness:
             return damping.coefficient_at(1.0)
         return damping.coefficient_at(spring_tangent / self.base_tangent)
 
@@ -197,7 +199,9 @@ def locked_wave_generator(model: HarmonicDrive, torque: Callable) -> ODESystem:
     J = np.asarray(model.drive.J_out, dtype=float)
 
     def rhs(t, y):
-        x = y.reshape(M, n).T
+        # one sample: Python floats through the laws (numpy on 1-element arrays costs ~4x),
+        # as on the driven bench
+        x = y.tolist() if M == 1 else y.reshape(M, n).T
         theta, omega = x[0], x[1]
         tau, rates, _ = path.evaluate(theta, omega, x[2:])
         dx = np.empty((n, M))

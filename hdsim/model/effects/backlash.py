@@ -156,10 +156,10 @@ class DeadZoneBacklash(Backlash):
         # twenty times the Jacobians on a driven run. The weight rises from 0 to 1 while
         # the contact factor goes from 0.99 to 0.999, so in the gap and in the rounded
         # corner the body's own rate counts (docs/physics.md §6.2).
-        weight = np.clip((contact - 0.99) / 0.009, 0.0, 1.0)
+        weight = np.minimum(np.maximum((contact - 0.99) / 0.009, 0.0), 1.0)  # np.clip, at a third of the cost
         weight = weight * weight * (3.0 - 2.0 * weight)
         body_rate = weight * twist_rate + (1.0 - weight) * body_rate
-        if not np.all(damped):
+        if not damped.all():
             # undamped body: the balance T = B holds; its time derivative fixes the rates, and
             # a slow pull (stabilisation_time) keeps round-off from drifting off the balance
             direction = np.where(np.asarray(twist_rate) >= 0.0, 1.0, -1.0)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass
 from functools import cached_property
 from typing import ClassVar
@@ -103,15 +105,23 @@ class FourierKinematicError(KinematicError):
 
     def displacement_and_partials(self, wg_angle, output_angle, load_fraction):
         wg, out, gain = self._harmonics
+        # a single model's right-hand side passes Python floats: `math` is ten times numpy there
+        scalar = isinstance(gain, float) and all(isinstance(v, float) for v in (wg_angle, output_angle, load_fraction))
+        sin, cos = (math.sin, math.cos) if scalar else (np.sin, np.cos)
         base = d_w = d_o = 0.0
         for k, a, p in wg:
             arg = k * wg_angle + p
-            base = base + a * np.sin(arg)
-            d_w = d_w + a * k * np.cos(arg)
+            base = base + a * sin(arg)
+            d_w = d_w + a * k * cos(arg)
         for k, a, p in out:
             arg = k * output_angle + p
-            base = base + a * np.sin(arg)
-            d_o = d_o + a * k * np.cos(arg)
+            base = base + a * sin(arg)
+            d_o = d_o + a * k * cos(arg)
+        if scalar:
+            raw = 1.0 + gain * abs(load_fraction)
+            d_f = gain * math.copysign(1.0, load_fraction) * base if raw > 0.0 and load_fraction != 0.0 else 0.0
+            scale = max(raw, 0.0)
+            return scale * base, scale * d_w, scale * d_o, d_f
         raw = 1.0 + gain * np.abs(load_fraction)
         scale = np.maximum(raw, 0.0)
         d_f = np.where(raw > 0.0, gain * np.sign(load_fraction), 0.0) * base
