@@ -89,7 +89,8 @@ def test_auto_keeps_the_dynamic_model_where_the_criterion_fails_and_forcing_says
     from hdsim.identification.fit import build_model
 
     maxwell = build_model(unit, {"friction": "maxwell_slip", "kinematic_error": "fourier"})
-    short = contract.with_updates({"input.output_revolutions": 0.01, "input.settle_revolutions": 0.005})
+    short = contract.with_updates({"input.output_revolutions": 0.002, "input.settle_revolutions": 0.001,
+                                   "input.ramp_s": 0.02, "input.dwell_s": 0.01})
     run = run_scenario(maxwell, short, evaluator="auto")
     assert run.result.metadata["evaluator"]["chosen"] == "dynamic"
     forced = run_scenario(maxwell, short, evaluator="quasistatic")
@@ -102,8 +103,8 @@ def test_a_maxwell_slip_law_runs_on_the_driven_bench_alone_as_in_a_batch(unit, c
     from hdsim.identification.fit import build_model
 
     maxwell = build_model(unit, {"friction": "maxwell_slip", "kinematic_error": "fourier"})
-    short = contract.with_updates({"input.output_revolutions": 0.01, "input.settle_revolutions": 0.005,
-                                   "input.speed_rpm": 2000.0})
+    short = contract.with_updates({"input.output_revolutions": 0.002, "input.settle_revolutions": 0.001,
+                                   "input.speed_rpm": 2000.0, "input.ramp_s": 0.02, "input.dwell_s": 0.01})
     alone = run_scenario(maxwell, short)
     pair = run_scenario(maxwell.with_updates({"drive.J_in": np.full(2, maxwell.drive.J_in)}), short)
     for name in ("windup_arcsec", "transmission_accuracy_arcsec"):
