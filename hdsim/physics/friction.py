@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 
@@ -147,6 +149,12 @@ def dahl_slip_rates(slips, twist_rate, elastic_tangent, elastic_torque, slip_tor
     """
     from hdsim.physics.backlash import smooth_contact, smooth_dead_zone
 
+    if isinstance(slips, float):  # one slider of a single model, as Python floats: `math`, ten times numpy
+        friction_torque = elastic_torque - stiffnesses * smooth_dead_zone(slips, slip_maxes, stop_width)
+        stick = stiffnesses * max(1.0 - friction_torque / slip_torques * math.tanh(twist_rate / velocity_scale), 0.0)
+        D = stick + stiffnesses * smooth_contact(slips, slip_maxes, stop_width)
+        slider_compliance = 1.0 / max(D, 1e-9 * stiffnesses)
+        return twist_rate / (1.0 / max(elastic_tangent, 1e-300) + slider_compliance) * slider_compliance
     stop_torque = stiffnesses * smooth_dead_zone(slips, slip_maxes, stop_width)
     friction_torque = elastic_torque - stop_torque
     direction = np.tanh(twist_rate / velocity_scale)

@@ -433,6 +433,11 @@ class DahlSlip(Friction):
     def rates(self, states, body_rate, spring_torque, spring_tangent):
         states = _states(states)
         torque, reach, stiffness = self._law(states)
+        if states.ndim == 1 and isinstance(body_rate, float) and torque.size == 1:
+            # a single model's right-hand side: the one slider as Python floats
+            torque, reach, stiffness = float(torque[0]), float(reach[0]), float(stiffness[0])
+            return (fr.dahl_slip_rates(float(states[0]), float(body_rate), float(spring_tangent), float(spring_torque),
+                                       torque, reach, stiffness, 0.02 * reach, self.velocity_scale),)
         return tuple(fr.dahl_slip_rates(states, body_rate, spring_tangent, spring_torque, torque, reach,
                                         stiffness, 0.02 * reach, self.velocity_scale))
 
