@@ -74,7 +74,7 @@ MIN_RELAXATIONS_BEFORE_WINDOW = 20.0
 #: least every `MAX_GAP` samples (`step_grid`): ~700 steps instead of the contract run's
 #: 26,000 samples. The gap matters more than the share: a Dahl-slip law ratchets a little
 #: at each reversal of the kinematic error's inertial ripple, which steps 64 samples apart
-#: see in part (windup 0.021 arcsec from solve_ivp; every sample: 0.012 arcsec, 13x slower)
+#: see in part (windup 0.024 arcsec from solve_ivp; every sample: 0.015 arcsec, 13x slower)
 STEP_OF_RATED = 2e-3
 MAX_GAP = 64
 
