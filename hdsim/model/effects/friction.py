@@ -412,7 +412,7 @@ class DahlSlip(Friction):
 
     id: ClassVar[str] = "dahl_slip"
     state_names: ClassVar[tuple[str, ...]] = ("slip",)
-    #: the default law: within 0.005 arcsec of transmission accuracy on the contract run
+    #: the default law: within 0.01 arcsec of transmission accuracy on the contract run
     driven_quasistatic: ClassVar[bool] = True
     slip_torque: float = param("torque at which the slider slides", "N·m", positive=True)
     slip_max: float = param("slip range to each stop", "rad", 0.0, 0.05, positive=True)
