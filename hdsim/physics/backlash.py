@@ -7,10 +7,10 @@ import math
 import numpy as np
 
 
-def _scalars(*values) -> bool:
+def _scalars(twist, half_gap, width) -> bool:
     """All plain numbers: a single model's right-hand side, evaluated with `math` (numpy on a
     Python float costs a microsecond a call, ten times the `math` function's)."""
-    return all(isinstance(v, float) for v in values)
+    return isinstance(twist, float) and isinstance(half_gap, float) and isinstance(width, float)
 
 
 def dead_zone(twist, half_gap):
