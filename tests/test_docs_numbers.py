@@ -44,7 +44,8 @@ def _agrees(quoted: str, value: float) -> bool:
     mantissa = quoted.split("e")[0]
     decimals = len(mantissa.split(".")[1]) if "." in mantissa else 0
     exponent = int(quoted.split("e")[1]) if "e" in quoted else 0
-    return abs(value - float(quoted)) <= 0.5 * 10.0 ** (exponent - decimals) * (1 + 1e-9) + RESOLUTION * abs(value)
+    digit = 0.5 * 10.0 ** (exponent - decimals) * (1 + 1e-9)
+    return abs(value - float(quoted)) <= digit + RESOLUTION * abs(value)
 
 
 @pytest.fixture
