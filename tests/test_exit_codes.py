@@ -77,11 +77,21 @@ def test_an_output_folder_that_cannot_be_written_is_said_before_the_work(tmp_pat
     # a path through a file: no folder can be made there (root, as CI runs, passes permission
     # checks, so a file stands for the read-only folder)
     (tmp_path / "a_file").write_text("x")
-    for args in (["simulate", "lost_motion", "--out", str(tmp_path / "a_file" / "out")],
-                 ["demo", "--out", str(tmp_path / "a_file" / "demo")]):
+    record = tmp_path / "bench.csv"  # a valid stiffness record: the refusal must not be about the data
+    t = np.linspace(0.0, 10.0, 400)
+    torque = 40.0 * np.sin(2.0 * np.pi * t / 5.0)
+    angle = torque / 3e4 + 1e-6 * np.random.default_rng(0).normal(size=t.size)
+    record.write_text("# test: stiffness\ntime_s,torque_Nm,angle_rad\n"
+                      + "".join(f"{a},{b},{c}\n" for a, b, c in zip(t, torque, angle)))
+    blocked = tmp_path / "a_file"
+    for args in (["simulate", "lost_motion", "--out", blocked / "out"],
+                 ["demo", "--out", blocked / "demo"],
+                 ["sobol", "--function", "ishigami", "--n", "64", "--workers", "1", "--out", blocked / "study.h5"],
+                 ["diagnose", record, "--report", blocked / "report"],
+                 ["fit", record, "--report", blocked / "report"]):
         code, out, err = cli(*args)
-        assert code == 2 and len(err.strip().splitlines()) == 1 and "cannot write into" in err, err
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file"]
+        assert code == 2 and len(err.strip().splitlines()) == 1 and "cannot write into" in err, (args[0], err)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file", "bench.csv"]
 
 
 @pytest.mark.parametrize("number, code", [(errno.ENOSPC, 2), (errno.EACCES, 2), (errno.EROFS, 2), (errno.ENOENT, 1)])
