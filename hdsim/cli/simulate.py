@@ -27,8 +27,9 @@ def register(subparsers) -> None:
     p.add_argument("--no-figures", action="store_true", help="write the HDF5 result only")
     p.add_argument("--evaluator", choices=("dynamic", "quasistatic", "auto"), default="dynamic",
                    help="'dynamic' (default): solve_ivp on the full model, the reference; "
-                        "'quasistatic': inertia dropped (locked bench only); 'auto': the latter where "
-                        "the bench's criterion holds")
+                        "'quasistatic': the twist's inertia dropped; 'auto': the latter where the "
+                        "bench's criterion holds (the ±4 %% lost-motion test, kinematic-error runs at "
+                        "constant speed)")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.set_defaults(func=main)
 

@@ -46,8 +46,8 @@ def register(subparsers) -> None:
                         "scenario file (default: the built-in scenario reporting --output)")
     p.add_argument("--evaluator", choices=("auto", "dynamic", "quasistatic"), default="auto",
                    help="--unit: 'auto' (default) runs a quasi-static scenario (the ±4 %% lost-motion "
-                        "test) through the quasi-static evaluator, anything else through solve_ivp; "
-                        "'dynamic' forces solve_ivp")
+                        "test, kinematic-error runs at constant speed) through the quasi-static evaluator, "
+                        "anything else through solve_ivp; 'dynamic' forces solve_ivp")
     p.add_argument("--n", default="1024", help="base points N, a power of 2 (default 1024)")
     p.add_argument("--second-order", action="store_true", help="also estimate S2")
     p.add_argument("--seed", default="0", help="scramble seed (default 0)")
