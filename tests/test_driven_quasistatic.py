@@ -148,3 +148,17 @@ def test_quasistatic_on_a_driven_bench_without_a_choice_is_refused_only_for_bad_
     with pytest.raises(InputError, match="evaluator"):
         run_scenario(unit, contract, evaluator="fast")
     assert set(QUASISTATIC_GROUPS) <= set(contract.metrics)
+
+
+def test_a_transmission_accuracy_study_from_the_command_line_runs_quasi_statically_and_says_why(cli, tmp_path):
+    import json
+
+    code, out, err = cli("sobol", "--unit", "CSG-25-100", "--params", "h_pz", "--range", "10%",
+                         "--output", "transmission_accuracy_arcsec", "--n", "16", "--workers", "1", "--json",
+                         cwd=tmp_path)
+    assert code == 0, err
+    summary = json.loads(out)
+    choice = summary["evaluator"]
+    assert choice["requested"] == "auto" and choice["chosen"] == "quasistatic"
+    assert choice["figures"]["ripple_ratio"] < 0.01 and "prescribed" in choice["reason"]
+    assert summary["evaluations"] == 16 * (1 + 2) and not summary["failures"]
