@@ -1,7 +1,7 @@
 """The driven bench's quasi-static evaluator against solve_ivp, and the criterion that allows it.
 
 The reference is the dynamic contract kinematic-error run (solve_ivp at the scenario's
-tolerance, the session's ``ke_run``); the issue's bar is the same transmission accuracy
+tolerance, the session's ``ke_run``); the bar is the same transmission accuracy
 within 0.1 arcsec. The criterion is checked on the cases that must fail it: a motor loop,
 a metric read outside constant-speed windows, a law not shown to agree, a presliding
 stiffer than the bound, a path without losses.
