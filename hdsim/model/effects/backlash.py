@@ -138,16 +138,16 @@ class DeadZoneBacklash(Backlash):
     def transmit(self, twist, twist_rate, states, body: Body):
         k0 = body.base_stiffness
         eps = self.contact_compliance_share
-        closure = np.asarray(states)[0]
+        closure = states[0]
         closed, contact = self.engage(closure)
         torque = k0 * closed
         body_twist = twist - (closure - (1.0 - eps) * closed)
         total, spring_torque, tangent = body.static(body_twist)
-        c = np.asarray(body.coefficient(body_twist, tangent), dtype=float)
+        c = body.coefficient(body_twist, tangent)
         slope = 1.0 - (1.0 - eps) * contact  # g'(v)
-        damped = c > 0.0
+        damped = np.greater(c, 0.0)
         # damped body: it relaxes towards the torque the dead zone passes on
-        body_rate = (torque - total) / np.where(damped, c, 1.0)
+        body_rate = (torque - total) / (c if damped is np.True_ else np.where(damped, c, 1.0))
         closure_rate = (twist_rate - body_rate) / slope
         # Deep in contact the body twists with the output; its relaxation rate equals ẋ up
         # to a transient of time constant c·ε/K₀ (a fraction of a nanosecond). There the
