@@ -16,7 +16,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from threadpoolctl import threadpool_limits
 
-from hdsim.simulation.block_radau import BlockDiagonalRadau
+from hdsim.simulation.block_radau import BlockDiagonalRadau, DenseRadau
 from hdsim.simulation.path import ODESystem
 from hdsim.errors import InputError, SolverError
 
@@ -115,6 +115,8 @@ def integrate(system: ODESystem, t_span, t_eval=None, options: SolverOptions | N
         kwargs.update(lband=n - 1, uband=n - 1)
     elif M > 1 and options.method == "Radau":
         kwargs.update(method=BlockDiagonalRadau, block_size=n, jac=system.block_jacobian)
+    elif options.method == "Radau":
+        kwargs.update(method=DenseRadau)
     elif M > 1 and options.method == "BDF":
         kwargs.update(jac=system.block_jacobian)
     # BLAS threads buy nothing on these small vectors and, with several study processes on
