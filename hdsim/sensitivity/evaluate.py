@@ -289,8 +289,11 @@ def evaluate(func, X, executor=None, *, workers=2, chunksize=None, rows=None,
     return out
 
 
-#: times a chunk cancelled by the executor itself (not by us) is submitted again before the
-#: study gives up; Dask cancels a task when the worker holding it leaves under some races
+#: times a chunk the executor lost is submitted again before the study gives up. Dask
+#: cancels a task when the worker holding it leaves under some races, and under others the
+#: task errs with an error of Dask's own (``ValueError: too many values to unpack`` when an
+#: in-process worker closed under it). `run_chunk` never raises for the model (a failing row
+#: is data), so an error out of a chunk is the executor's, and running the chunk again is safe
 CANCELLED_CHUNK_RETRIES = 3
 
 
@@ -312,11 +315,15 @@ def _run_pool(pool, func, X, spans, rows, out, on_chunk, bar, window):
             done, _ = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
             for fut in done:
                 span = pending.pop(fut)
-                if fut.cancelled():
-                    # Nobody here cancelled it: the executor lost it (a worker that left).
-                    # Rows are pure and addressed by index, so running the chunk again is safe.
+                error = None if fut.cancelled() else fut.exception()
+                if fut.cancelled() or error is not None:
+                    # Nobody here cancelled it and the model does not raise: the executor lost
+                    # it (a worker that left). Rows are pure and addressed by index, so running
+                    # the chunk again is safe.
                     cancelled[span] = cancelled.get(span, 0) + 1
                     if cancelled[span] > CANCELLED_CHUNK_RETRIES:
+                        if error is not None:
+                            raise error
                         raise RuntimeError(
                             f"the executor cancelled the chunk of rows {rows[span[0]]}-{rows[span[1] - 1]} "
                             f"{cancelled[span]} times (workers lost?); what finished is kept, "
