@@ -3,7 +3,8 @@
 Session fixtures (each built on first use, then reused by every test that asks):
 
 - ``ke_run``: the shipped ``kinematic_error.toml`` on CSG-25-100 (the contract scenario,
-  ~7 s); used only by the checks of the contract scenario's numbers (test_driven_physics.py).
+  ~4 s); used by the checks of the contract scenario's numbers (test_driven_physics.py) and
+  as the reference of the driven quasi-static evaluator (test_driven_quasistatic.py).
 - ``default_lost_motion_run``, ``default_stiffness_run``: the shipped ±4 % T_N lost-motion
   and ±T_N stiffness scenarios on the default unit with its default effects.
 - ``short_ke_run``: the contract scenario on CSG-25-100 shortened to 0.02 output
