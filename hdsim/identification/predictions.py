@@ -37,14 +37,14 @@ import numpy as np
 
 from hdsim.errors import InputError, SolverError
 
-#: the catalog tests and the metrics read from each: (scenario, metric, label, unit, scale)
+#: the catalog tests and the metrics read from each: (scenario, metric, label, unit)
 CATALOG_TESTS = (
-    ("lost_motion", "lost_motion_arcmin", "lost motion, ±4 % T_N", "arcmin", 1.0),
-    ("stiffness", "K1_Nm_per_rad", "K1", "N·m/rad", 1.0),
-    ("stiffness", "K2_Nm_per_rad", "K2", "N·m/rad", 1.0),
-    ("stiffness", "K3_Nm_per_rad", "K3", "N·m/rad", 1.0),
-    ("stiffness", "torsion_at_rated_arcmin", "torsion at T_N", "arcmin", 1.0),
-    ("stiffness", "hysteresis_loss_arcmin", "hysteresis loss", "arcmin", 1.0),
+    ("lost_motion", "lost_motion_arcmin", "lost motion, ±4 % T_N", "arcmin"),
+    ("stiffness", "K1_Nm_per_rad", "K1", "N·m/rad"),
+    ("stiffness", "K2_Nm_per_rad", "K2", "N·m/rad"),
+    ("stiffness", "K3_Nm_per_rad", "K3", "N·m/rad"),
+    ("stiffness", "torsion_at_rated_arcmin", "torsion at T_N", "arcmin"),
+    ("stiffness", "hysteresis_loss_arcmin", "hysteresis loss", "arcmin"),
 )
 #: datasheet figures a built-in unit's catalog entry gives, by metric
 DATASHEET_KEYS = {"K1_Nm_per_rad": "K1", "K2_Nm_per_rad": "K2", "K3_Nm_per_rad": "K3"}
@@ -129,10 +129,10 @@ def catalog_predictions(result, *, samples: int = SAMPLES, seed: int = 0) -> lis
                 nonlinear.append(metric)
         if nonlinear:  # one batch of draws for every metric of the test that needs them
             bands.update(_sampled_bands(model, coordinates, scenario, nonlinear, samples, seed))
-        for (_, metric, label, unit, scale), v in zip(wanted, values):
+        for (_, metric, label, unit), v in zip(wanted, values):
             low, high, method = bands[metric]
-            out.append(Prediction(label, unit, float(v[0]) * scale, low * scale, high * scale,
-                                  catalog.get(DATASHEET_KEYS.get(metric, "")), method))
+            out.append(Prediction(label, unit, float(v[0]), low, high, catalog.get(DATASHEET_KEYS.get(metric, "")),
+                                  method))
     return out
 
 

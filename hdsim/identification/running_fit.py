@@ -423,7 +423,7 @@ def fit_running(record, families=(), rows=None, widened=()) -> RunningFit:
         if best is None or rss < best[0]:
             best = (rss, nonlinear, owners, names, A, x)
     rss, nonlinear, owners, names, A, x = best
-    law = _law_of(rec, terms, owners, names, x, nonlinear)
+    law = _law_of(rec.velocity_scale, terms, owners, names, x, nonlinear)
     inertia = float(x[-1])
     side = rec.side_factor
     prediction = side * (law.torque(rec.speed, rec.measurement.wg_angle) + inertia * rec.accel)
@@ -442,13 +442,9 @@ def fit_running(record, families=(), rows=None, widened=()) -> RunningFit:
                       _uncertainty(cov, owners, names), {t.family: t.id for t in terms[1:]}, coordinates)
 
 
-def _law_of(rec: SweepRecord, terms: list, owners: list, names: list, x: np.ndarray, nonlinear: dict):
+def _law_of(velocity_scale: float, terms, owners, names, x: np.ndarray, nonlinear: dict):
     """The law with the amplitudes ``x`` written back, or None when a term cannot hold its
     amplitudes (`RunningTerm.holds`)."""
-    return _written_back(rec.velocity_scale, terms, owners, names, x, nonlinear)
-
-
-def _written_back(velocity_scale: float, terms, owners, names, x, nonlinear: dict):
     law = unit_law(velocity_scale)
     for term in terms:
         coefficients = {n: float(v) for o, n, v in zip(owners, names, x) if o is term}
@@ -469,7 +465,7 @@ def _held_solution(rec, terms, owners, names, A, y, lower, upper, nonlinear) -> 
     model never fits worse. The base always holds, so the recursion ends.
     """
     x = _solve(A, y, lower, upper)
-    if _law_of(rec, terms, owners, names, x, nonlinear) is not None:
+    if _law_of(rec.velocity_scale, terms, owners, names, x, nonlinear) is not None:
         return x
     best = None
     for term in terms[1:]:  # the base level (first) is every model's
@@ -534,7 +530,7 @@ class SweepCoordinates:
 
     def law(self, x) -> InputFriction | None:
         """The law with amplitudes ``x``; None where a term cannot hold them."""
-        return _written_back(self.velocity_scale, self.terms, self.owners, self.names, x, self.nonlinear)
+        return _law_of(self.velocity_scale, self.terms, self.owners, self.names, x, self.nonlinear)
 
 
 def _owner_name(owner) -> str:
