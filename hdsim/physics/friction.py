@@ -149,21 +149,18 @@ def dahl_slip_rates(slips, twist_rate, elastic_tangent, elastic_torque, slip_tor
     """
     from hdsim.physics.backlash import smooth_contact, smooth_dead_zone
 
-    if isinstance(slips, float):  # one slider of a single model, as Python floats: `math`, ten times numpy
-        friction_torque = elastic_torque - stiffnesses * smooth_dead_zone(slips, slip_maxes, stop_width)
-        stick = stiffnesses * max(1.0 - friction_torque / slip_torques * math.tanh(twist_rate / velocity_scale), 0.0)
-        D = stick + stiffnesses * smooth_contact(slips, slip_maxes, stop_width)
-        slider_compliance = 1.0 / max(D, 1e-9 * stiffnesses)
-        return twist_rate / (1.0 / max(elastic_tangent, 1e-300) + slider_compliance) * slider_compliance
+    # one slider of a single model comes as Python floats: `math` there, ten times numpy
+    one = isinstance(slips, float)
+    tanh, floor, total = (math.tanh, max, float) if one else (np.tanh, np.maximum, lambda c: np.sum(c, axis=0))
     stop_torque = stiffnesses * smooth_dead_zone(slips, slip_maxes, stop_width)
     friction_torque = elastic_torque - stop_torque
-    direction = np.tanh(twist_rate / velocity_scale)
+    direction = tanh(twist_rate / velocity_scale)
     stick = dahl_slope(friction_torque, direction, stiffnesses, slip_torques)
     D = stick + stiffnesses * smooth_contact(slips, slip_maxes, stop_width)
     # compliances, floored so a free slider is very compliant rather than infinitely so
-    slider_compliance = 1.0 / np.maximum(D, 1e-9 * stiffnesses)
-    spring_compliance = 1.0 / np.maximum(elastic_tangent, 1e-300)
-    torque_rate = twist_rate / (spring_compliance + np.sum(slider_compliance, axis=0))
+    slider_compliance = 1.0 / floor(D, 1e-9 * stiffnesses)
+    spring_compliance = 1.0 / floor(elastic_tangent, 1e-300)
+    torque_rate = twist_rate / (spring_compliance + total(slider_compliance))
     return torque_rate * slider_compliance
 
 
