@@ -8,6 +8,7 @@ from pathlib import Path
 from hdsim.atomic import check_writable_folder
 from hdsim.cli import _common, emit_json
 from hdsim.model.catalog import load_unit
+from hdsim.scenarios.evaluator import EVALUATORS
 from hdsim.scenarios.run import run_scenario
 from hdsim.scenarios.scenario import builtin_scenario_names, load_scenario
 
@@ -25,7 +26,7 @@ def register(subparsers) -> None:
     _common.add_set_argument(p)
     p.add_argument("--out", default="hdsim-out", help="output folder (default ./hdsim-out)")
     p.add_argument("--no-figures", action="store_true", help="write the HDF5 result only")
-    p.add_argument("--evaluator", choices=("dynamic", "quasistatic", "auto"), default="dynamic",
+    p.add_argument("--evaluator", choices=EVALUATORS, default="dynamic",
                    help="'dynamic' (default): solve_ivp on the full model, the reference; "
                         "'quasistatic': the twist's inertia dropped; 'auto': the latter where the "
                         "bench's criterion holds (the ±4 %% lost-motion test, kinematic-error runs at "

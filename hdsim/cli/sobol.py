@@ -19,6 +19,7 @@ from pathlib import Path
 
 from hdsim.atomic import check_writable_folder
 from hdsim.errors import InputError
+from hdsim.scenarios.evaluator import EVALUATORS
 
 HELP = "Sobol' sensitivity study (first, total, optional second order) with checks"
 
@@ -44,7 +45,7 @@ def register(subparsers) -> None:
     p.add_argument("--scenario", metavar="NAME|FILE.toml",
                    help="scenario the metric comes from (--unit): a built-in name or a "
                         "scenario file (default: the built-in scenario reporting --output)")
-    p.add_argument("--evaluator", choices=("auto", "dynamic", "quasistatic"), default="auto",
+    p.add_argument("--evaluator", choices=EVALUATORS, default="auto",
                    help="--unit: 'auto' (default) runs a quasi-static scenario (the ±4 %% lost-motion "
                         "test, kinematic-error runs at constant speed) through the quasi-static evaluator, "
                         "anything else through solve_ivp; 'dynamic' forces solve_ivp")

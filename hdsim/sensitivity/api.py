@@ -93,7 +93,8 @@ def sobol(drive, params: str | Iterable[str] | TypedBounds, output: str, *, scen
         ``log(line)`` for warnings; default stderr.
     evaluator : {"auto", "dynamic", "quasistatic"}
         "auto" runs the rows through the quasi-static evaluator where the scenario is
-        quasi-static by its bench's criterion (the ±4 % lost-motion test), else through
+        quasi-static by its bench's criterion (the ±4 % lost-motion test, a kinematic-error
+        run at constant speed), else through
         ``solve_ivp``; "dynamic" forces the reference (docs/sensitivity.md, "Which
         evaluator"). The choice, its reason and the figures of the criterion are in
         ``result.extra["evaluator"]``.
