@@ -12,14 +12,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hdsim.errors import InputError
 from hdsim.model import effects as fx
 from hdsim.model.catalog import load_unit
 from hdsim.scenarios.driven import bench_from_scenario, quasistatic_criterion
 from hdsim.scenarios.run import run_scenario
 from hdsim.scenarios.scenario import load_scenario
-from hdsim.simulation.driven_quasistatic import (MAX_STICKING_RATIO, QUASISTATIC_GROUPS, _rigid_pass,
-                                                 step_grid)
+from hdsim.simulation.driven_quasistatic import MAX_STICKING_RATIO, _rigid_pass, step_grid
 from hdsim.units import rad_to_arcsec
 
 
@@ -142,12 +140,6 @@ def test_the_inertial_load_of_the_kinematic_error_is_what_its_acceleration_asks(
     # the 4x term at 1 kHz, 0.4 % of the peak
     np.testing.assert_allclose(measured, expected * (1.0 + ke.load_gain * np.abs(rigid["frac"][inside, 0])),
                                rtol=0.02, atol=6e-3 * np.max(np.abs(expected)))
-
-
-def test_quasistatic_on_a_driven_bench_without_a_choice_is_refused_only_for_bad_names(unit, contract):
-    with pytest.raises(InputError, match="evaluator"):
-        run_scenario(unit, contract, evaluator="fast")
-    assert set(QUASISTATIC_GROUPS) <= set(contract.metrics)
 
 
 def test_a_transmission_accuracy_study_from_the_command_line_runs_quasi_statically_and_says_why(cli, tmp_path):

@@ -134,14 +134,16 @@ def _twist(model: HarmonicDrive, t: np.ndarray, torque: np.ndarray, slow: np.nda
     slow = np.broadcast_to(slow, (t.size, M))
     grid = step_grid(slow[:, 0], STEP_OF_RATED * float(np.max(model.drive.rated_torque)), MAX_GAP)
     options = dict(grid=grid, return_states=True, max_iter=MAX_ITER)
-    if np.allclose(torque, torque[:, :1], rtol=1e-12, atol=0.0):
+    shared = np.allclose(torque, torque[:, :1], rtol=1e-12, atol=0.0)
+    if shared:
         twist, states = locked_twist(model, t, np.ascontiguousarray(torque[:, 0]), **options)
     else:
         parts = [locked_twist(sample_model(model, m), t, np.ascontiguousarray(torque[:, m]), **options)
                  for m in range(M)]
         twist = np.concatenate([p[0] for p in parts])
         states = np.concatenate([np.atleast_2d(p[1]) if np.ndim(p[1]) == 2 else p[1] for p in parts], axis=-2)
-    stepped = np.array([np.interp(t, t[grid], torque[grid, m]) for m in range(M)])
+    # the torque the steps saw, interpolated between them: once for a shared history
+    stepped = np.array([np.interp(t, t[grid], torque[grid, m]) for m in range(1 if shared else M)])
     ripple = (torque.T - stepped) / np.atleast_1d(np.asarray(model.base_stiffness, dtype=float))[:, None]
     return twist + ripple, states
 
