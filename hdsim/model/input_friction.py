@@ -61,6 +61,7 @@ from typing import ClassVar
 import numpy as np
 
 from hdsim.errors import InputError, unknown_name
+from hdsim.physics.elementary import cos, exp, tanh
 from hdsim.model.parameters import Parameters, _as_float_array, param
 from hdsim.units import rpm_to_rad_per_s
 
@@ -153,7 +154,7 @@ class InputFriction(Parameters):
         """
         m = 1.0
         for k, r, p in zip(self.ripple_orders, self.ripple_amplitudes, self.ripple_phases):
-            m = m + r * np.cos(k * angle + p)
+            m = m + r * cos(k * angle + p)
         return m
 
     def position_torque(self, angle):
@@ -166,9 +167,9 @@ class InputFriction(Parameters):
         angle : float or array
             WG angle θ [rad].
         """
-        g = 0.0 * np.asarray(angle, dtype=float)
+        g = 0.0 * (angle if isinstance(angle, float) else np.asarray(angle, dtype=float))
         for k, a, p in zip(self.position_orders, self.position_amplitudes, self.position_phases):
-            g = g + a * np.cos(k * angle + p)
+            g = g + a * cos(k * angle + p)
         return g
 
     def ripple_torques(self) -> tuple:
@@ -193,8 +194,8 @@ class InputFriction(Parameters):
         float or array
             Friction torque [N·m].
         """
-        sign = np.tanh(speed / self.velocity_scale)
-        excess = (self.starting_torque - self.coulomb_torque) * np.exp(-(speed / self.stribeck_speed) ** 2)
+        sign = tanh(speed / self.velocity_scale)
+        excess = (self.starting_torque - self.coulomb_torque) * exp(-(speed / self.stribeck_speed) ** 2)
         level = (self.coulomb_torque * self.modulation(angle) + excess + self.coulomb_asymmetry * sign
                  + self.load_coefficient * abs(mesh_torque))
         return level * sign + self.viscous * speed + self.position_torque(angle)

@@ -2,15 +2,10 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-
-def _scalars(twist, half_gap, width) -> bool:
-    """All plain numbers: a single model's right-hand side, evaluated with `math` (numpy on a
-    Python float costs a microsecond a call, ten times the `math` function's)."""
-    return isinstance(twist, float) and isinstance(half_gap, float) and isinstance(width, float)
+from hdsim.physics.elementary import tanh
+from hdsim.physics.smooth import softplus
 
 
 def dead_zone(twist, half_gap):
@@ -53,16 +48,7 @@ def smooth_dead_zone(twist, half_gap, width):
     float or array
         Twist carried by the contact [rad].
     """
-    if _scalars(twist, half_gap, width):
-        def softplus(x):
-            z = x / width
-            return width * (max(z, 0.0) + math.log1p(math.exp(-abs(z))))
-    else:
-        def softplus(x):
-            z = x / width
-            return width * (np.maximum(z, 0.0) + np.log1p(np.exp(-np.abs(z))))
-
-    return softplus(twist - half_gap) - softplus(-twist - half_gap)
+    return softplus(twist - half_gap, width) - softplus(-twist - half_gap, width)
 
 
 def smooth_contact(twist, half_gap, width):
@@ -82,7 +68,6 @@ def smooth_contact(twist, half_gap, width):
     float or array
         d(smooth_dead_zone)/d(twist) [-].
     """
-    tanh = math.tanh if _scalars(twist, half_gap, width) else np.tanh
     return 1.0 + 0.5 * (tanh(0.5 * (twist - half_gap) / width) + tanh(0.5 * (-twist - half_gap) / width))
 
 

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from hdsim.physics.smooth import magnitude_and_sign, softplus, softplus_slope
+
 
 def three_segment_twist(torque, T1, T2, K1, K2, K3):
     """Catalog three-segment law: twist at output torque ``torque``.
@@ -63,16 +65,6 @@ def three_segment_torque(twist, T1, T2, K1, K2, K3):
     return np.sign(twist) * torque
 
 
-def _softplus(x, width):
-    """Smooth ``max(x, 0)`` over ``width``: ``w·log(1 + exp(x/w))``, overflow-safe."""
-    z = x / width
-    return width * (np.maximum(z, 0.0) + np.log1p(np.exp(-np.abs(z))))
-
-
-def _sigmoid(x, width):
-    return 0.5 * (1.0 + np.tanh(0.5 * x / width))
-
-
 def smooth_three_segment_torque(twist, T1, T2, K1, K2, K3, width):
     """Three-segment law with its two knees rounded over ``width`` (softplus).
 
@@ -96,11 +88,11 @@ def smooth_three_segment_torque(twist, T1, T2, K1, K2, K3, width):
     float or array
         Torque [N·m].
     """
-    a = np.abs(twist)
+    a, sign = magnitude_and_sign(twist)
     phi1 = T1 / K1
     phi2 = phi1 + (T2 - T1) / K2
-    torque = K1 * a + (K2 - K1) * _softplus(a - phi1, width) + (K3 - K2) * _softplus(a - phi2, width)
-    return np.sign(twist) * torque
+    torque = K1 * a + (K2 - K1) * softplus(a - phi1, width) + (K3 - K2) * softplus(a - phi2, width)
+    return sign * torque
 
 
 def smooth_three_segment_tangent(twist, T1, T2, K1, K2, K3, width):
@@ -122,10 +114,10 @@ def smooth_three_segment_tangent(twist, T1, T2, K1, K2, K3, width):
     float or array
         dT/dφ [N·m/rad].
     """
-    a = np.abs(twist)
+    a = abs(twist) if isinstance(twist, float) else np.abs(twist)
     phi1 = T1 / K1
     phi2 = phi1 + (T2 - T1) / K2
-    return K1 + (K2 - K1) * _sigmoid(a - phi1, width) + (K3 - K2) * _sigmoid(a - phi2, width)
+    return K1 + (K2 - K1) * softplus_slope(a - phi1, width) + (K3 - K2) * softplus_slope(a - phi2, width)
 
 
 def three_segment_tangent(twist, T1, T2, K1, K2, K3):

@@ -14,6 +14,8 @@ from typing import Callable
 
 import numpy as np
 
+from hdsim.physics.elementary import tanh
+
 TWO_PI = 2.0 * np.pi
 
 
@@ -161,11 +163,11 @@ def opposing_load(torque, motion, smoothing_speed, ratio) -> Load:
         return -np.tanh(gain * np.asarray(w_o)) * T
 
     def value(t):
-        return _outer(-np.tanh(gain * motion.speed(t) / ratio), T)
+        return _outer(-tanh(gain * motion.speed(t) / ratio), T)
 
     def rate(t):
         x = gain * motion.speed(t) / ratio
-        return _outer(-(1.0 - np.tanh(x) ** 2) * gain * motion.accel(t) / ratio, T)
+        return _outer(-(1.0 - tanh(x) ** 2) * gain * motion.accel(t) / ratio, T)
 
     return Load(value, rate, at_output_speed=at_output_speed)
 

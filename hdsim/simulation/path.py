@@ -197,6 +197,7 @@ def locked_wave_generator(model: HarmonicDrive, torque: Callable) -> ODESystem:
     names = ("theta_out", "omega_out") + path.states
     n = len(names)
     J = np.asarray(model.drive.J_out, dtype=float)
+    J = float(J) if J.size == 1 else J  # a float for the scalar path
 
     def rhs(t, y):
         # one sample: Python floats through the laws (numpy on 1-element arrays costs ~4x),

@@ -6,6 +6,9 @@ Pure functions of time, vectorised over time.
 
 from __future__ import annotations
 
+import bisect
+import math
+
 import numpy as np
 
 
@@ -32,8 +35,14 @@ def cosine_ramps(times, levels):
     times = np.asarray(times, dtype=float)
     levels = np.asarray(levels, dtype=float)
     last = len(times) - 2
+    # plain lists for the solver's scalar path (numpy on a float costs ~10x)
+    time_list, level_list = times.tolist(), levels.tolist()
 
     def value(t):
+        if isinstance(t, float):
+            i = min(max(bisect.bisect_right(time_list, t) - 1, 0), last)
+            s = min(max((t - time_list[i]) / (time_list[i + 1] - time_list[i]), 0.0), 1.0)
+            return level_list[i] + (level_list[i + 1] - level_list[i]) * 0.5 * (1.0 - math.cos(math.pi * s))
         i = np.clip(np.searchsorted(times, t, side="right") - 1, 0, last)
         s = np.clip((t - times[i]) / (times[i + 1] - times[i]), 0.0, 1.0)
         return levels[i] + (levels[i + 1] - levels[i]) * 0.5 * (1.0 - np.cos(np.pi * s))

@@ -145,9 +145,11 @@ class DeadZoneBacklash(Backlash):
         total, spring_torque, tangent = body.static(body_twist)
         c = body.coefficient(body_twist, tangent)
         slope = 1.0 - (1.0 - eps) * contact  # g'(v)
-        damped = np.greater(c, 0.0)
+        # a single model's damped body as Python floats: numpy costs ~10x on a float
+        scalar = isinstance(c, float) and isinstance(contact, float) and c > 0.0
+        damped = True if scalar else np.greater(c, 0.0)
         # damped body: it relaxes towards the torque the dead zone passes on
-        body_rate = (torque - total) / (c if damped is np.True_ else np.where(damped, c, 1.0))
+        body_rate = (torque - total) / (c if scalar or damped is np.True_ else np.where(damped, c, 1.0))
         closure_rate = (twist_rate - body_rate) / slope
         # Deep in contact the body twists with the output; its relaxation rate equals ẋ up
         # to a transient of time constant c·ε/K₀ (a fraction of a nanosecond). There the
@@ -156,10 +158,11 @@ class DeadZoneBacklash(Backlash):
         # twenty times the Jacobians on a driven run. The weight rises from 0 to 1 while
         # the contact factor goes from 0.99 to 0.999, so in the gap and in the rounded
         # corner the body's own rate counts (docs/physics.md §6.2).
-        weight = np.minimum(np.maximum((contact - 0.99) / 0.009, 0.0), 1.0)  # np.clip, at a third of the cost
+        ramp = (contact - 0.99) / 0.009
+        weight = min(max(ramp, 0.0), 1.0) if scalar else np.minimum(np.maximum(ramp, 0.0), 1.0)  # np.clip's cost / 3
         weight = weight * weight * (3.0 - 2.0 * weight)
         body_rate = weight * twist_rate + (1.0 - weight) * body_rate
-        if not damped.all():
+        if not (scalar or damped.all()):
             # undamped body: the balance T = B holds; its time derivative fixes the rates, and
             # a slow pull (stabilisation_time) keeps round-off from drifting off the balance
             direction = np.where(np.asarray(twist_rate) >= 0.0, 1.0, -1.0)

@@ -426,27 +426,30 @@ class DahlSlip(Friction):
         return _states(states)[0]
 
     def _law(self, states):
-        torque = np.asarray(self.slip_torque)[None]
-        reach = np.asarray(self.slip_max)[None]
+        """(slip torque, slip range, stick stiffness): Python floats for a single model's
+        floats (its right-hand side's scalar path, where numpy costs ~4x), else arrays
+        with an element axis."""
+        torque, reach = self.slip_torque, self.slip_max
+        if not (isinstance(torque, float) and isinstance(reach, float)):
+            torque, reach = np.asarray(torque)[None], np.asarray(reach)[None]
         return torque, reach, self.stiffness_ratio * torque / reach
 
     def rates(self, states, body_rate, spring_torque, spring_tangent):
-        states = _states(states)
         torque, reach, stiffness = self._law(states)
-        if states.ndim == 1 and isinstance(body_rate, float) and torque.size == 1:
+        if isinstance(body_rate, float) and isinstance(states[0], float) and np.size(torque) == 1:
             # a single model's right-hand side: the one slider as Python floats
-            torque, reach, stiffness = float(torque[0]), float(reach[0]), float(stiffness[0])
-            return (fr.dahl_slip_rates(float(states[0]), float(body_rate), float(spring_tangent), float(spring_torque),
+            torque, reach, stiffness = (v if isinstance(v, float) else float(v[0]) for v in (torque, reach, stiffness))
+            return (fr.dahl_slip_rates(float(states[0]), body_rate, float(spring_tangent), float(spring_torque),
                                        torque, reach, stiffness, 0.02 * reach, self.velocity_scale),)
-        return tuple(fr.dahl_slip_rates(states, body_rate, spring_tangent, spring_torque, torque, reach,
+        return tuple(fr.dahl_slip_rates(_states(states), body_rate, spring_tangent, spring_torque, torque, reach,
                                         stiffness, 0.02 * reach, self.velocity_scale))
 
     def compiled(self, size, c_struct, c_mesh):
         if not self.keeps_law_of(DahlSlip, _LAW + ("_law",)) or self.substeps != 8:
             return None
         from hdsim.model.effects import kernels
-        torque, reach, stiffness = self._law(None)
-        return (kernels.dahl_slip_step,), parameter_rows(size, torque[0], reach[0], stiffness[0], 0.02 * reach[0])
+        torque, reach, stiffness = (np.ravel(v)[0] for v in self._law(None))
+        return (kernels.dahl_slip_step,), parameter_rows(size, torque, reach, stiffness, 0.02 * reach)
 
     def free_parameters(self, context: FitContext):
         t = context.max_torque
