@@ -1,0 +1,135 @@
+"""A single model's right-hand side runs on Python floats (`math`, `bisect`), a batch's on
+numpy arrays: both must compute the same numbers.
+
+The laws pick their branch by the type of their argument (`hdsim.physics.elementary`,
+`hdsim.physics.smooth`), so a single model and a batch of two copies of it go through
+different code. Here both are evaluated at the same states, law by law and through the
+whole right-hand side of each bench, and must agree to round-off: `math` and numpy may
+differ in the last bit of a transcendental function, and a difference near cancellation
+(``1 − tanh²`` near 1, the dead zone's ``1 − (1 − ε)κ`` of 1e-5 in contact) shows that bit
+relative to the law's scale, not to the value. A wrong branch differs by far more.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from hdsim.model import effects as fx
+from hdsim.model.catalog import load_unit
+from hdsim.physics import backlash as bl
+from hdsim.physics import smooth
+from hdsim.physics import stiffness as st
+from hdsim.scenarios.driven import bench_from_scenario
+from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario
+from hdsim.simulation.loads import opposing_load
+from hdsim.simulation.motion import SpeedKnots
+from hdsim.simulation.path import locked_wave_generator
+from hdsim.simulation.profiles import cosine_ramps
+
+
+
+def _close(scalar, array, rtol=1e-13):
+    """Equal within ``rtol`` of the values and of the largest of them (the law's scale)."""
+    array = np.asarray(array, dtype=float)
+    np.testing.assert_allclose(scalar, array, rtol=rtol, atol=rtol * float(np.max(np.abs(array))))
+
+POINTS = np.concatenate([np.linspace(-3e-3, 3e-3, 41), [0.0, -0.0, 1e-9, -2.5e-4, 2.5e-4]])
+
+
+def _both(function, *args):
+    """``function`` element by element on floats, and once on the array."""
+    scalar = np.array([function(float(x), *args) for x in POINTS])
+    return scalar, np.asarray(function(POINTS, *args), dtype=float)
+
+
+@pytest.mark.parametrize("function, args", [
+    (smooth.softplus, (2e-4,)), (smooth.softplus_slope, (2e-4,)),
+    (lambda x: smooth.magnitude_and_sign(x)[0], ()), (lambda x: smooth.magnitude_and_sign(x)[1], ()),
+    (st.smooth_three_segment_torque, (10.0, 40.0, 3e4, 4.5e4, 7.5e4, 2e-5)),
+    (st.smooth_three_segment_tangent, (10.0, 40.0, 3e4, 4.5e4, 7.5e4, 2e-5)),
+    (bl.smooth_dead_zone, (1e-4, 2e-5)), (bl.smooth_contact, (1e-4, 2e-5)),
+], ids=["softplus", "softplus_slope", "magnitude", "sign", "spring", "tangent", "dead_zone", "contact"])
+def test_each_law_gives_floats_what_it_gives_arrays(function, args):
+    scalar, array = _both(function, *args)
+    assert all(isinstance(function(float(x), *args), float) for x in POINTS[:3])  # the float branch ran
+    _close(scalar, array)
+
+
+def test_the_sign_is_numpys_at_zero_and_nan():
+    for x in (0.0, -0.0, math.nan, math.inf, -2.0):
+        _, sign = smooth.magnitude_and_sign(x)
+        np.testing.assert_equal(sign, np.sign(x))
+
+
+def test_profiles_motion_and_brake_give_floats_what_they_give_arrays():
+    times = np.linspace(0.0, 1.3, 200)
+    ramp = cosine_ramps([0.0, 0.3, 0.7, 1.2], [0.0, 80.0, -80.0, 0.0])
+    knots = SpeedKnots([0.0, 0.2, 0.6, 0.9], [0.0, 300.0, 300.0, -150.0])
+    brake = opposing_load(20.0, knots.motion({}, "test"), smoothing_speed=3.0, ratio=100.0)
+    for function in (ramp, knots.speed, knots.accel, knots.angle, brake.torque, brake.rate):
+        scalar = np.array([function(float(t)) for t in times])
+        _close(scalar, function(times))
+
+
+def test_input_friction_gives_floats_what_it_gives_arrays():
+    law = load_unit().input_friction.with_updates(
+        ripple_orders=(1.0, 2.0), ripple_amplitudes=(0.1, 0.05), ripple_phases=(0.3, -1.0),
+        position_orders=(4.0,), position_amplitudes=(0.02,), position_phases=(0.5,), coulomb_asymmetry=0.01,
+        load_coefficient=0.02)
+    speed = np.linspace(-50.0, 50.0, 101)
+    angle = np.linspace(0.0, 20.0, 101)
+    mesh = np.linspace(-1.0, 1.0, 101)
+    scalar = np.array([law.torque(float(w), float(a), float(m)) for w, a, m in zip(speed, angle, mesh)])
+    _close(scalar, law.torque(speed, angle, mesh))
+
+
+EFFECTS = {
+    "default": {},
+    "tanh-maxwell-gradual": dict(hardening=fx.TanhHardening(e_inf=2.5, T_s=30.0),
+                                 friction=fx.MaxwellSlip(k_total=3e4, slip_torque_max=6.0, velocity_scale=1e-6),
+                                 backlash=fx.GradualDeadZone(gap=1e-4, contact_rounding=2.0)),
+    "3seg-distributed-undamped": dict(hardening=fx.ThreeSegmentHardening(T1=10.0, T2=40.0, e2=1.5, e3=2.5),
+                                      friction=fx.DistributedSlip(slip_torque=8.0, slip_max=2e-4, spread=0.5),
+                                      damping=fx.NO_EFFECT["damping"]),
+    "dahl-coulomb": dict(friction=fx.DahlFriction(torque_max=4.0, sigma=6e4)),
+}
+
+
+def _single_and_pair(effects):
+    """The default unit with ``effects``, and a batch of two copies of it (array parameters)."""
+    model = load_unit().with_effects(**effects) if effects else load_unit()
+    h_c = float(model.params()["flexspline.h_c"])
+    return model, model.with_updates({"flexspline.h_c": np.array([h_c, h_c])})
+
+
+def _states(system, seed):
+    """States about the start, each spread over its own scale."""
+    rng = np.random.default_rng(seed)
+    return [system.y0 + system.state_scales * rng.normal(0.0, 3.0, system.state_scales.size) for _ in range(20)]
+
+
+def _agree(single, pair, times):
+    assert single.batch == 1 and pair.batch == 2
+    for k, (t, y) in enumerate(zip(times, _states(single, 7))):
+        one = single.rhs(float(t), y)
+        two = pair.rhs(float(t), np.concatenate([y, y]))
+        # the stiff rates amplify a last-bit difference by up to 1e5 (the module text)
+        np.testing.assert_allclose(np.concatenate([one, one]), two, rtol=1e-9, atol=1e-300, err_msg=f"state {k}")
+
+
+@pytest.mark.parametrize("effects", EFFECTS.values(), ids=EFFECTS.keys())
+def test_the_locked_bench_of_a_single_model_is_that_of_a_batch(effects):
+    model, pair = _single_and_pair(effects)
+    profile = cosine_ramps([0.0, 1.0, 2.0], [0.0, 80.0, -80.0])
+    _agree(locked_wave_generator(model, profile), locked_wave_generator(pair, lambda t: profile(t) * np.ones(2)),
+           np.linspace(0.05, 1.9, 20))
+
+
+@pytest.mark.parametrize("scenario", ["kinematic_error", "running_torque"])
+@pytest.mark.parametrize("effects", [EFFECTS["default"], EFFECTS["tanh-maxwell-gradual"]],
+                         ids=["default", "tanh-maxwell-gradual"])
+def test_the_driven_bench_of_a_single_model_is_that_of_a_batch(scenario, effects):
+    model, pair = _single_and_pair(effects)
+    bench = bench_from_scenario(model, load_scenario(builtin_scenario_path(scenario)))
+    _agree(bench.system(model), bench.system(pair), np.linspace(0.1, 0.9 * bench.t_end, 20))
