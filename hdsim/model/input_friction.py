@@ -61,8 +61,8 @@ from typing import ClassVar
 import numpy as np
 
 from hdsim.errors import InputError, unknown_name
-from hdsim.physics.elementary import cos, exp, tanh
 from hdsim.model.parameters import Parameters, _as_float_array, param
+from hdsim.physics.elementary import cos, exp, tanh
 from hdsim.units import rpm_to_rad_per_s
 
 #: reference speed of the catalog's no-load running torque [rad/s]

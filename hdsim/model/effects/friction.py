@@ -427,7 +427,7 @@ class DahlSlip(Friction):
 
     def _law(self, states):
         """(slip torque, slip range, stick stiffness): Python floats for a single model's
-        floats (its right-hand side's scalar path, where numpy costs ~4x), else arrays
+        floats (its right-hand side's scalar path, where numpy costs ~10x), else arrays
         with an element axis."""
         torque, reach = self.slip_torque, self.slip_max
         if not (isinstance(torque, float) and isinstance(reach, float)):
