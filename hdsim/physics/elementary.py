@@ -22,6 +22,11 @@ def exp(x):
     return math.exp(x) if isinstance(x, float) else np.exp(x)
 
 
+def sin(x):
+    """sin of a float (`math`) or an array (numpy)."""
+    return math.sin(x) if isinstance(x, float) else np.sin(x)
+
+
 def cos(x):
     """cos of a float (`math`) or an array (numpy)."""
     return math.cos(x) if isinstance(x, float) else np.cos(x)

@@ -248,9 +248,7 @@ def run_driven(model: HarmonicDrive, scenario, *, samples_per_segment: int | Non
                                "times) and the output sampling")
     system = bench.system(model)
     t_eval = bench.sample_times()
-    result = integrate_segments(system, schedule, t_eval)
-    result.metadata.update(windows={k: [float(a), float(b)] for k, (a, b) in bench.motion.windows.items()},
-                           input_mode=bench.mode, profile=bench.motion.description)
+    result = _with_bench_metadata(integrate_segments(system, schedule, t_eval), bench)
     metrics = driven_metrics(model, scenario, bench, result)
     return scenario, result, metrics
 
@@ -269,11 +267,17 @@ def run_driven_quasistatic(model: HarmonicDrive, scenario, *, samples_per_segmen
     t_eval = bench.sample_times()
     refuse_if_too_large(scenario.source, samples=t_eval.size, duration=bench.t_end, batch=model.batch_size,
                         min_steps=t_eval.size, set_by="the input and load durations and the output sampling")
-    result = SimulationResult(t=t_eval, states={}, signals=driven_signals(model, bench, t_eval), setup=SETUP,
-                              solver={"method": "quasistatic"})
+    result = _with_bench_metadata(SimulationResult(t=t_eval, states={}, signals=driven_signals(model, bench, t_eval),
+                                                   setup=SETUP, solver={"method": "quasistatic"}), bench)
+    return scenario, result, driven_metrics(model, scenario, bench, result)
+
+
+def _with_bench_metadata(result: SimulationResult, bench) -> SimulationResult:
+    """``result`` with the bench's metric windows, input mode and profile name in its metadata
+    (both evaluators' runs carry them)."""
     result.metadata.update(windows={k: [float(a), float(b)] for k, (a, b) in bench.motion.windows.items()},
                            input_mode=bench.mode, profile=bench.motion.description)
-    return scenario, result, driven_metrics(model, scenario, bench, result)
+    return result
 
 
 def quasistatic_criterion(model: HarmonicDrive, scenario):

@@ -8,7 +8,6 @@ at rest; its ``windows`` name the time intervals the metrics read (docs/tutorial
 
 from __future__ import annotations
 
-import bisect
 import math
 from dataclasses import dataclass, field
 from typing import Callable
@@ -16,7 +15,7 @@ from typing import Callable
 import numpy as np
 
 from hdsim.errors import InputError
-from hdsim.simulation.profiles import cosine_ramps
+from hdsim.simulation.profiles import cosine_ramps, segment_of
 
 TWO_PI = 2.0 * np.pi
 
@@ -100,10 +99,8 @@ class SpeedKnots:
         self._vlist, self._alist = self.speeds.tolist(), self.angles.tolist()
 
     def _scalar(self, t):
-        i = min(max(bisect.bisect_right(self._tlist, t) - 1, 0), len(self._tlist) - 2)
-        d = self._dlist[i]
-        s = min(max((t - self._tlist[i]) / d, 0.0), 1.0)
-        return i, s, self._vlist[i], self._vlist[i + 1], d
+        i, s = segment_of(self._tlist, t)
+        return i, s, self._vlist[i], self._vlist[i + 1], self._dlist[i]
 
     def _locate(self, t):
         t = np.asarray(t, dtype=float)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from functools import cached_property
 from typing import ClassVar
@@ -13,6 +12,8 @@ from hdsim.errors import InputError
 from hdsim.model.effects.base import Effect
 from hdsim.model.parameters import param
 from hdsim.physics import kinematic_error as ke
+from hdsim.physics.elementary import cos, sin
+from hdsim.physics.smooth import magnitude_and_sign
 
 
 class KinematicError(Effect):
@@ -104,9 +105,7 @@ class FourierKinematicError(KinematicError):
 
     def displacement_and_partials(self, wg_angle, output_angle, load_fraction):
         wg, out, gain = self._harmonics
-        # a single model's right-hand side passes Python floats: `math` is ten times numpy there
-        scalar = isinstance(gain, float) and all(isinstance(v, float) for v in (wg_angle, output_angle, load_fraction))
-        sin, cos = (math.sin, math.cos) if scalar else (np.sin, np.cos)
+        # a single model's right-hand side passes Python floats: `math` there (hdsim.physics.elementary)
         base = d_w = d_o = 0.0
         for k, a, p in wg:
             arg = k * wg_angle + p
@@ -116,14 +115,14 @@ class FourierKinematicError(KinematicError):
             arg = k * output_angle + p
             base = base + a * sin(arg)
             d_o = d_o + a * k * cos(arg)
-        if scalar:
-            raw = 1.0 + gain * abs(load_fraction)
-            d_f = gain * math.copysign(1.0, load_fraction) * base if raw > 0.0 and load_fraction != 0.0 else 0.0
+        magnitude, sign = magnitude_and_sign(load_fraction)
+        raw = 1.0 + gain * magnitude
+        if isinstance(raw, float):
             scale = max(raw, 0.0)
-            return scale * base, scale * d_w, scale * d_o, d_f
-        raw = 1.0 + gain * np.abs(load_fraction)
-        scale = np.maximum(raw, 0.0)
-        d_f = np.where(raw > 0.0, gain * np.sign(load_fraction), 0.0) * base
+            d_f = gain * sign * base if raw > 0.0 else 0.0 * base
+        else:
+            scale = np.maximum(raw, 0.0)
+            d_f = np.where(raw > 0.0, gain * sign, 0.0) * base
         return scale * base, scale * d_w, scale * d_o, d_f
 
     def linear_basis(self, wg_angle, output_angle):
