@@ -24,7 +24,7 @@ from hdsim.scenarios.driven import bench_from_scenario
 from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario
 from hdsim.simulation.loads import opposing_load
 from hdsim.simulation.motion import SpeedKnots
-from hdsim.simulation.path import locked_wave_generator
+from hdsim.simulation.path import ElasticPath, locked_wave_generator
 from hdsim.simulation.profiles import cosine_ramps
 
 
@@ -133,3 +133,23 @@ def test_the_driven_bench_of_a_single_model_is_that_of_a_batch(scenario, effects
     model, pair = _single_and_pair(effects)
     bench = bench_from_scenario(model, load_scenario(builtin_scenario_path(scenario)))
     _agree(bench.system(model), bench.system(pair), np.linspace(0.1, 0.9 * bench.t_end, 20))
+
+
+@pytest.mark.parametrize("effects", EFFECTS.values(), ids=EFFECTS.keys())
+def test_a_single_models_elastic_path_computes_in_python_floats(effects):
+    # numpy's scalars pass `isinstance(x, float)` but cost ~3x a float per operation: the
+    # parameters, the structure's split and the states must reach the laws as floats
+    model, _ = _single_and_pair(effects)
+    path = ElasticPath(model)
+    states = [float(v) for v in path.settled(1e-4, np.zeros(len(path.states)))]
+    torque, _, _ = path.evaluate(1e-4, 1e-3, states)
+    assert type(torque) is float  # a law with an element axis (distributed slip) keeps numpy inside
+
+
+def test_numpy_scalars_become_floats_and_arrays_stay_arrays():
+    model = load_unit().with_updates({"damping.coefficient": np.float64(2.5),
+                                      "friction.slip_torque": np.array(3.0)})
+    assert type(model.damping.coefficient) is float and model.damping.coefficient == 2.5
+    assert type(model.friction.slip_torque) is float and model.friction.slip_torque == 3.0
+    batch = load_unit().with_updates({"damping.coefficient": np.array([2.0, 3.0])})
+    assert isinstance(batch.damping.coefficient, np.ndarray) and batch.damping.coefficient.shape == (2,)

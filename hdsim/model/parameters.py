@@ -71,6 +71,11 @@ class Parameters:
             if np.any(bad):
                 first = np.atleast_1d(value)[np.argmax(np.atleast_1d(bad))]
                 raise InputError(f"{self.prefix}.{f.name} = {first:g} is outside {bound} {f.metadata['unit']}")
+            raw = getattr(self, f.name)
+            if value.ndim == 0 and type(raw) is not float and not isinstance(raw, int):
+                # a numpy scalar or 0-d array becomes a Python float: a single model's
+                # right-hand side runs on floats, where numpy's scalars cost ~3x an operation
+                object.__setattr__(self, f.name, float(value))
 
     def params(self) -> dict:
         """Every numeric field by name."""

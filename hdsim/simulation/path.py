@@ -58,12 +58,13 @@ class ElasticPath:
 
     def __post_init__(self):
         model = self.model
-        c_struct, c_mesh = model.split()
+        c_struct, c_mesh = (float(c) if np.ndim(c) == 0 else c for c in model.split())  # a float for the scalar path
         object.__setattr__(self, "c_struct", c_struct)
         object.__setattr__(self, "c_mesh", c_mesh)
         object.__setattr__(self, "spring_law", model.hardening.spring_law(c_struct, c_mesh))
         # stiffness at zero twist: the dead zone's stiffness in contact and the damping reference
-        object.__setattr__(self, "base_tangent", model.hardening.tangent(0.0, c_struct, c_mesh))
+        base_tangent = model.hardening.tangent(0.0, c_struct, c_mesh)
+        object.__setattr__(self, "base_tangent", float(base_tangent) if np.ndim(base_tangent) == 0 else base_tangent)
         object.__setattr__(self, "n_friction", len(model.friction.state_names))
         # asked at every evaluation of the right-hand side; the effect does not change
         object.__setattr__(self, "damping_follows_stiffness", model.damping.follows_stiffness)
@@ -96,7 +97,8 @@ class ElasticPath:
     def evaluate(self, twist, twist_rate, states):
         """(torque [N·m], state rates, series friction twist [rad]) at the output twist and rate."""
         model = self.model
-        states = np.asarray(states) if len(states) else np.zeros((0,) + np.shape(twist))
+        if not isinstance(states, list):  # a single model's states stay a list of floats
+            states = np.asarray(states) if len(states) else np.zeros((0,) + np.shape(twist))
         friction_states, backlash_states = states[:self.n_friction], states[self.n_friction:]
         body = _Body(self, friction_states)
         torque, body_twist, body_rate, spring_torque, tangent, backlash_rates = \

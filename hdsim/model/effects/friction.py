@@ -41,6 +41,12 @@ def _states(states) -> np.ndarray:
     return np.asarray(states, dtype=float)
 
 
+def _first_state(states):
+    """The first state: a single model's float as it is, else an array."""
+    first = states[0]
+    return first if type(first) is float else np.asarray(states, dtype=float)[0]
+
+
 def element_columns(columns: tuple, states) -> tuple:
     """A law's per-element parameter columns, each (n, M), shaped to broadcast against
     ``states`` (element axis first, the sample axis last)."""
@@ -202,11 +208,11 @@ class _DahlLaw(Friction):
             return np.where(sigma > 0.0, sigma / F, 0.0), F
 
     def parallel_torque(self, states):
-        return _states(states)[0]
+        return _first_state(states)
 
     def rates(self, states, body_rate, spring_torque, spring_tangent):
         sigma, F = self._law()
-        z = _states(states)[0]
+        z = _first_state(states)
         return (fr.dahl_slope(z, np.sign(body_rate), sigma, F) * body_rate,)
 
     def advance(self, states, start, end, spring):
@@ -423,7 +429,7 @@ class DahlSlip(Friction):
     velocity_scale: ClassVar[float] = 1e-6
 
     def series_slip(self, states):
-        return _states(states)[0]
+        return _first_state(states)
 
     def _law(self, states):
         """(slip torque, slip range, stick stiffness): Python floats for a single model's
