@@ -22,7 +22,7 @@ from hdsim.physics import smooth
 from hdsim.physics import stiffness as st
 from hdsim.scenarios.driven import bench_from_scenario
 from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario
-from hdsim.simulation.loads import opposing_load
+from hdsim.simulation.loads import opposing_load, ramped_load
 from hdsim.simulation.motion import SpeedKnots
 from hdsim.simulation.path import ElasticPath, locked_wave_generator
 from hdsim.simulation.profiles import cosine_ramps
@@ -70,6 +70,22 @@ def test_profiles_motion_and_brake_give_floats_what_they_give_arrays():
     for function in (ramp, knots.speed, knots.accel, knots.angle, brake.torque, brake.rate):
         scalar = np.array([function(float(t)) for t in times])
         _close(scalar, function(times))
+
+
+@pytest.mark.parametrize("shape", ["cosine", "linear"])
+def test_motion_and_load_at_one_time_are_their_separate_calls(shape):
+    # the right-hand side asks `Motion.at` and `Load.at` for everything at once: bit for bit
+    # what the separate functions give, before, inside and after the knots
+    knots = SpeedKnots([0.0, 0.2, 0.6, 0.9], [0.0, 300.0, 300.0, -150.0], shape)
+    motion = knots.motion({}, "test")
+    loads = (opposing_load(20.0, motion, smoothing_speed=3.0, ratio=100.0), ramped_load(12.0, 0.4))
+    for t in (-0.1, 0.0, 0.05, 0.2, 0.41, 0.75, 0.9, 1.4):
+        assert motion.at(t) == (motion.angle(t), motion.speed(t), motion.accel(t))
+        for load in loads:
+            assert load.at(t) == (load.torque(t), load.rate(t))
+    times = np.linspace(0.0, 1.0, 7)[:, None]  # arrays: the three (two) calls
+    for got, want in zip(motion.at(times), (motion.angle(times), motion.speed(times), motion.accel(times))):
+        np.testing.assert_array_equal(got, want)
 
 
 def test_input_friction_gives_floats_what_it_gives_arrays():
@@ -126,9 +142,8 @@ def test_the_locked_bench_of_a_single_model_is_that_of_a_batch(effects):
            np.linspace(0.05, 1.9, 20))
 
 
-@pytest.mark.parametrize("scenario", ["kinematic_error", "running_torque"])
-@pytest.mark.parametrize("effects", [EFFECTS["default"], EFFECTS["tanh-maxwell-gradual"]],
-                         ids=["default", "tanh-maxwell-gradual"])
+@pytest.mark.parametrize("scenario", ["kinematic_error", "running_torque", "reversal"])
+@pytest.mark.parametrize("effects", EFFECTS.values(), ids=EFFECTS.keys())
 def test_the_driven_bench_of_a_single_model_is_that_of_a_batch(scenario, effects):
     model, pair = _single_and_pair(effects)
     bench = bench_from_scenario(model, load_scenario(builtin_scenario_path(scenario)))

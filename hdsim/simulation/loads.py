@@ -46,6 +46,9 @@ class Load:
         [rad/s]. ``torque`` and ``rate`` are then its values along the commanded motion,
         which the load-dependent kinematic error follows (known in time, and equal at
         steady state). None: the load is ``torque(t)`` whatever the output does.
+    torque_and_rate : callable or None
+        Both at a float time in one call, for a load that finds them together; None:
+        `at` makes the two calls.
     """
 
     torque: Callable
@@ -56,6 +59,14 @@ class Load:
     sweep_start: float = 0.0
     frequency_schedule: list = field(default_factory=list)
     at_output_speed: Callable | None = None
+    torque_and_rate: Callable | None = None
+
+    def at(self, t) -> tuple:
+        """Load torque [N·m] and its rate [N·m/s] at ``t`` [s] (a float or an array); the
+        solver's scalar path asks for both at every call."""
+        if self.torque_and_rate is not None and isinstance(t, float):
+            return self.torque_and_rate(t)
+        return self.torque(t), self.rate(t)
 
 
 def per_sample(x):
@@ -123,15 +134,11 @@ def ramped_load(torque, ramp_s) -> Load:
     """
     T = per_sample(torque)
 
-    def value(t):
-        s, _ = smoothstep(t, 0.0, ramp_s)
-        return _outer(s, T)
+    def both(t):
+        s, ds = smoothstep(t, 0.0, ramp_s)
+        return _outer(s, T), _outer(ds, T)
 
-    def rate(t):
-        _, ds = smoothstep(t, 0.0, ramp_s)
-        return _outer(ds, T)
-
-    return Load(value, rate)
+    return Load(lambda t: both(t)[0], lambda t: both(t)[1], torque_and_rate=both)
 
 
 def opposing_load(torque, motion, smoothing_speed, ratio) -> Load:
@@ -162,14 +169,12 @@ def opposing_load(torque, motion, smoothing_speed, ratio) -> Load:
             return -T * math.tanh(gain * w_o)  # the solver's scalar path
         return -np.tanh(gain * np.asarray(w_o)) * T
 
-    def value(t):
-        return _outer(-tanh(gain * motion.speed(t) / ratio), T)
+    def both(t):
+        _, speed, accel = motion.at(t)
+        x = gain * speed / ratio
+        return _outer(-tanh(x), T), _outer(-(1.0 - tanh(x) ** 2) * gain * accel / ratio, T)
 
-    def rate(t):
-        x = gain * motion.speed(t) / ratio
-        return _outer(-(1.0 - tanh(x) ** 2) * gain * motion.accel(t) / ratio, T)
-
-    return Load(value, rate, at_output_speed=at_output_speed)
+    return Load(lambda t: both(t)[0], lambda t: both(t)[1], at_output_speed=at_output_speed, torque_and_rate=both)
 
 
 def step_load(initial, final, ramp_s, step_time, rise_s) -> Load:

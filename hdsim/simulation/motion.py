@@ -38,6 +38,9 @@ class Motion:
         Largest |WG speed| [rad/s]; sets the output sampling and the solver's step bound.
     description : str
         Short name of the profile, stored with the result.
+    kinematics : callable or None
+        ``(angle, speed, accel)`` at a float time in one call, for a profile that finds all
+        three at once (`SpeedKnots`); None: `at` makes the three calls.
     """
 
     angle: Callable
@@ -47,6 +50,14 @@ class Motion:
     windows: dict = field(default_factory=dict)
     max_speed: float = 0.0
     description: str = ""
+    kinematics: Callable | None = None
+
+    def at(self, t) -> tuple:
+        """WG angle [rad], speed [rad/s] and acceleration [rad/s²] at ``t`` [s] (a float or
+        an array); the solver's scalar path asks for all three at every call."""
+        if self.kinematics is not None and isinstance(t, float):
+            return self.kinematics(t)
+        return self.angle(t), self.speed(t), self.accel(t)
 
 
 def hold_motion(t_end: float) -> Motion:
@@ -102,6 +113,26 @@ class SpeedKnots:
         i, s = segment_of(self._tlist, t)
         return i, s, self._vlist[i], self._vlist[i + 1], self._dlist[i]
 
+    def _speed_at(self, i, s, a, b, d):
+        return a + (b - a) * (s if self.shape == "linear" else 0.5 * (1.0 - math.cos(math.pi * s)))
+
+    def _accel_at(self, t, i, s, a, b, d):
+        if t < self._tlist[0] or t > self._tlist[-1]:
+            return 0.0
+        return (b - a) / d if self.shape == "linear" else 0.5 * (b - a) * math.pi / d * math.sin(math.pi * s)
+
+    def _angle_at(self, t, i, s, a, b, d):
+        if self.shape == "linear":
+            part = d * (a * s + 0.5 * (b - a) * s * s)
+        else:
+            part = d * (a * s + 0.5 * (b - a) * (s - math.sin(math.pi * s) / math.pi))
+        return self._alist[i] + part + max(t - self._tlist[-1], 0.0) * self._vlist[-1]
+
+    def kinematics(self, t: float) -> tuple:
+        """(angle [rad], speed [rad/s], acceleration [rad/s²]) at the float ``t`` [s], one lookup."""
+        where = self._scalar(t)
+        return self._angle_at(t, *where), self._speed_at(*where), self._accel_at(t, *where)
+
     def _locate(self, t):
         t = np.asarray(t, dtype=float)
         i = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, len(self.times) - 2)
@@ -111,8 +142,7 @@ class SpeedKnots:
     def speed(self, t):
         """WG speed [rad/s] at ``t`` [s] (a float or an array)."""
         if isinstance(t, float):
-            i, s, a, b, d = self._scalar(t)
-            return a + (b - a) * (s if self.shape == "linear" else 0.5 * (1.0 - math.cos(math.pi * s)))
+            return self._speed_at(*self._scalar(t))
         if self.shape != "linear":
             return self._cosine_speed(np.asarray(t, dtype=float))
         t, i, s, a, b, d = self._locate(t)
@@ -121,10 +151,7 @@ class SpeedKnots:
     def accel(self, t):
         """WG acceleration [rad/s²] at ``t`` [s]; 0 outside the knots."""
         if isinstance(t, float):
-            if t < self._tlist[0] or t > self._tlist[-1]:
-                return 0.0
-            i, s, a, b, d = self._scalar(t)
-            return (b - a) / d if self.shape == "linear" else 0.5 * (b - a) * math.pi / d * math.sin(math.pi * s)
+            return self._accel_at(t, *self._scalar(t))
         t, i, s, a, b, d = self._locate(t)
         inside = (t >= self.times[0]) & (t <= self.times[-1])
         if self.shape == "linear":
@@ -134,12 +161,7 @@ class SpeedKnots:
     def angle(self, t):
         """WG angle [rad] at ``t`` [s], 0 at the first knot; the last speed holds after the last knot."""
         if isinstance(t, float):
-            i, s, a, b, d = self._scalar(t)
-            if self.shape == "linear":
-                part = d * (a * s + 0.5 * (b - a) * s * s)
-            else:
-                part = d * (a * s + 0.5 * (b - a) * (s - math.sin(math.pi * s) / math.pi))
-            return self._alist[i] + part + max(t - self._tlist[-1], 0.0) * self._vlist[-1]
+            return self._angle_at(t, *self._scalar(t))
         t, i, s, a, b, d = self._locate(t)
         if self.shape == "linear":
             part = d * (a * s + 0.5 * (b - a) * s * s)
@@ -151,7 +173,7 @@ class SpeedKnots:
     def motion(self, windows: dict, description: str) -> Motion:
         """This profile as a `Motion` with the metric ``windows`` {name: (start, end) [s]}."""
         return Motion(self.angle, self.speed, self.accel, float(self.times[-1]), windows,
-                      float(np.max(np.abs(self.speeds))), description)
+                      float(np.max(np.abs(self.speeds))), description, self.kinematics)
 
 
 def constant_speed_motion(speed, ratio, ramp_s, revolutions, settle_revolutions) -> Motion:
