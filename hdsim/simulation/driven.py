@@ -66,7 +66,7 @@ from hdsim.model.input_friction import NO_INPUT_FRICTION, InputFriction
 from hdsim.simulation.controller import PIController
 from hdsim.simulation.loads import NO_LOAD, Load, per_sample
 from hdsim.simulation.motion import Motion
-from hdsim.simulation.path import ElasticPath, ODESystem
+from hdsim.simulation.path import ElasticPath, ODESystem, pack_rates
 
 SETUP = "driven_wave_generator"
 #: what the bench's core computes at one time, in order: angles, speeds, accelerations,
@@ -226,12 +226,7 @@ def driven_wave_generator(model: HarmonicDrive, motion: Motion, load: Load = NO_
         rate += rates
         if track_energy:
             rate += [T_m * w_w, T_L * w_o, -tau * e_f * frac_rate]
-        if M == 1:
-            return np.array(rate, dtype=float)
-        dx = np.empty((n, M))
-        for i, r in enumerate(rate):
-            dx[i] = r
-        return dx.T.ravel()
+        return pack_rates(rate, n, M)
 
     def outputs(t, states):
         tt = np.asarray(t, dtype=float)[:, None]

@@ -187,6 +187,17 @@ class ODESystem:
         return {name: Y[:, i, :] for i, name in enumerate(self.state_names)}
 
 
+def pack_rates(rates: list, n: int, M: int) -> np.ndarray:
+    """The state rates (one entry per state, in order: floats for a single model, (M,) arrays or
+    scalars for a batch) as the solver's sample-major vector of length ``n·M``."""
+    if M == 1:
+        return np.array(rates, dtype=float)  # a single model's floats: one call
+    dx = np.empty((n, M))
+    for i, r in enumerate(rates):
+        dx[i] = r
+    return dx.T.ravel()
+
+
 def locked_wave_generator(model: HarmonicDrive, torque: Callable) -> ODESystem:
     """Stiffness-test bench: WG locked, circular spline fixed, torque on the output.
 
@@ -207,12 +218,7 @@ def locked_wave_generator(model: HarmonicDrive, torque: Callable) -> ODESystem:
         x = y.tolist() if M == 1 else y.reshape(M, n).T
         theta, omega = x[0], x[1]
         tau, rates, _ = path.evaluate(theta, omega, x[2:])
-        dx = np.empty((n, M))
-        dx[0] = omega
-        dx[1] = (torque(t) - tau) / J
-        for i, r in enumerate(rates):
-            dx[2 + i] = r
-        return dx.T.ravel()
+        return pack_rates([omega, (torque(t) - tau) / J, *rates], n, M)
 
     def outputs(t, states):
         # evaluate with time first, (nt, M), so per-sample parameters (M,) broadcast
