@@ -150,6 +150,24 @@ def test_the_driven_bench_of_a_single_model_is_that_of_a_batch(scenario, effects
     _agree(bench.system(model), bench.system(pair), np.linspace(0.1, 0.9 * bench.t_end, 20))
 
 
+@pytest.mark.parametrize("bench", ["locked", "kinematic_error", "reversal"])
+def test_a_batch_of_one_row_runs_as_its_single_model(bench):
+    # a study's task of one row: parameters as (1,) arrays, one sample, numpy inside
+    model = load_unit()
+    one = model.with_updates({"flexspline.h_c": np.array([float(model.params()["flexspline.h_c"])])})
+    assert one.batch_size == 1 and isinstance(one.params()["flexspline.h_c"], np.ndarray)
+    if bench == "locked":
+        profile = cosine_ramps([0.0, 1.0, 2.0], [0.0, 80.0, -80.0])
+        single, row, times = (locked_wave_generator(model, profile), locked_wave_generator(one, profile),
+                              np.linspace(0.05, 1.9, 20))
+    else:
+        setup = bench_from_scenario(model, load_scenario(builtin_scenario_path(bench)))
+        single, row, times = setup.system(model), setup.system(one), np.linspace(0.1, 0.9 * setup.t_end, 20)
+    for k, (t, y) in enumerate(zip(times, _states(single, 3))):
+        np.testing.assert_allclose(row.rhs(float(t), y), single.rhs(float(t), y), rtol=1e-9, atol=1e-300,
+                                   err_msg=f"state {k}")
+
+
 @pytest.mark.parametrize("effects", EFFECTS.values(), ids=EFFECTS.keys())
 def test_a_single_models_elastic_path_computes_in_python_floats(effects):
     # numpy's scalars pass `isinstance(x, float)` but cost ~3x a float per operation: the

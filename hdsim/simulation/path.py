@@ -191,7 +191,10 @@ def pack_rates(rates: list, n: int, M: int) -> np.ndarray:
     """The state rates (one entry per state, in order: floats for a single model, (M,) arrays or
     scalars for a batch) as the solver's sample-major vector of length ``n·M``."""
     if M == 1:
-        return np.array(rates, dtype=float)  # a single model's floats: one call
+        try:
+            return np.array(rates, dtype=float)  # a single model's floats: one call
+        except ValueError:  # a batch of one row: (1,) arrays among them, placed one by one
+            pass
     dx = np.empty((n, M))
     for i, r in enumerate(rates):
         dx[i] = r
