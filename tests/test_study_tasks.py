@@ -3,7 +3,10 @@ runs stays within its memory bound whatever the size of the design."""
 
 from __future__ import annotations
 
+import tracemalloc
+
 import numpy as np
+import pytest
 
 from hdsim.model.catalog import load_unit
 from hdsim.scenarios.driven import output_samples
@@ -40,3 +43,33 @@ def test_a_driven_study_sends_as_many_rows_as_its_memory_bound_allows():
     assert model_function(unit, ["h_pz"], "transmission_accuracy_arcsec").chunksize == rows
     # a locked-bench test's runs are short: its tasks stay large
     assert model_function(unit, ["h_pz"], "lost_motion_arcmin").chunksize == 1024
+
+
+def _bytes_per_sample_and_row(evaluator: str) -> float:
+    """The growth of a task's peak memory (tracemalloc: numpy's arrays included) per added
+    row and output sample, on the contract KE run shortened to 0.02 output turns each way."""
+    unit = load_unit("CSG-25-100")
+    scenario = load_scenario("kinematic_error").with_updates({"input.output_revolutions": 0.02,
+                                                              "input.settle_revolutions": 0.01})
+    samples = output_samples(unit, scenario)
+    f = model_function(unit, ["h_pz"], "transmission_accuracy_arcsec", scenario=scenario, evaluator=evaluator)
+    nominal = float(unit.params()["flexspline.h_pz"])
+    f(np.array([[nominal], [nominal]]))  # imports and caches outside the measurement
+    peaks = {}
+    for rows in (2, 6):
+        X = nominal * np.linspace(0.97, 1.03, rows)[:, None]
+        tracemalloc.start()
+        try:
+            assert np.all(np.isfinite(f(X)))
+            peaks[rows] = tracemalloc.get_traced_memory()[1]
+        finally:
+            tracemalloc.stop()
+    return (peaks[6] - peaks[2]) / (4 * samples)
+
+
+@pytest.mark.parametrize("evaluator", ["quasistatic", pytest.param("dynamic", marks=pytest.mark.slow)])
+def test_the_memory_bound_holds_what_a_task_really_allocates(evaluator):
+    # measured: ~110 B (quasi-static) and ~220 B (dynamic, solve_ivp's states and dense
+    # output) per row and sample; the bound must not be below what a task holds
+    measured = _bytes_per_sample_and_row(evaluator)
+    assert 0.0 < measured <= BYTES_PER_SAMPLE_AND_ROW
