@@ -15,7 +15,7 @@ import pytest
 
 from hdsim.errors import InputError
 from hdsim.identification.running_diagnosis import diagnose_running
-from hdsim.identification.running_fit import SweepRecord, fit_running
+from hdsim.identification.running_fit import fit_running
 from hdsim.identification.workflow import examine
 from hdsim.io.data_checks import DriveScale
 from hdsim.io.measurement import load_measurement, make_measurement, save_measurement
