@@ -86,6 +86,17 @@ def test_motion_and_load_at_one_time_are_their_separate_calls(shape):
     times = np.linspace(0.0, 1.0, 7)[:, None]  # arrays: the three (two) calls
     for got, want in zip(motion.at(times), (motion.angle(times), motion.speed(times), motion.accel(times))):
         np.testing.assert_array_equal(got, want)
+    # and what they give is a motion and a load: each rate is the derivative of its value
+    # (central differences, away from the knots where a linear profile's acceleration jumps)
+    h = 1e-6
+    for t in (0.05, 0.13, 0.41, 0.75):
+        (a0, _, _), (a1, _, _) = motion.at(t - h), motion.at(t + h)
+        (_, v0, _), (_, v1, _), (_, v, acc) = motion.at(t - h), motion.at(t + h), motion.at(t)
+        assert (a1 - a0) / (2 * h) == pytest.approx(v, rel=1e-6, abs=1e-6 * 300.0)
+        assert (v1 - v0) / (2 * h) == pytest.approx(acc, rel=1e-4, abs=1e-4 * 1500.0)
+        for load in loads:
+            (T0, _), (T1, _), (_, rate) = load.at(t - h), load.at(t + h), load.at(t)
+            assert (T1 - T0) / (2 * h) == pytest.approx(rate, rel=1e-4, abs=1e-4 * 1500.0)
 
 
 def test_input_friction_gives_floats_what_it_gives_arrays():

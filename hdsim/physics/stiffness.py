@@ -114,7 +114,7 @@ def smooth_three_segment_tangent(twist, T1, T2, K1, K2, K3, width):
     float or array
         dT/dφ [N·m/rad].
     """
-    a = abs(twist) if isinstance(twist, float) else np.abs(twist)
+    a, _ = magnitude_and_sign(twist)
     phi1 = T1 / K1
     phi2 = phi1 + (T2 - T1) / K2
     return K1 + (K2 - K1) * softplus_slope(a - phi1, width) + (K3 - K2) * softplus_slope(a - phi2, width)

@@ -165,9 +165,7 @@ def opposing_load(torque, motion, smoothing_speed, ratio) -> Load:
     gain = abs(ratio) / smoothing_speed  # output speed -> argument of tanh
 
     def at_output_speed(w_o):
-        if isinstance(w_o, float) and isinstance(T, float):
-            return -T * math.tanh(gain * w_o)  # the solver's scalar path
-        return -np.tanh(gain * np.asarray(w_o)) * T
+        return -tanh(gain * w_o) * T
 
     def both(t):
         _, speed, accel = motion.at(t)

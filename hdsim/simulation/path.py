@@ -19,6 +19,7 @@ import numpy as np
 from scipy import sparse
 
 from hdsim.model.drive import HarmonicDrive
+from hdsim.model.parameters import float_if_scalar
 
 
 class _Body:
@@ -58,13 +59,12 @@ class ElasticPath:
 
     def __post_init__(self):
         model = self.model
-        c_struct, c_mesh = (float(c) if np.ndim(c) == 0 else c for c in model.split())  # a float for the scalar path
+        c_struct, c_mesh = (float_if_scalar(c) for c in model.split())
         object.__setattr__(self, "c_struct", c_struct)
         object.__setattr__(self, "c_mesh", c_mesh)
         object.__setattr__(self, "spring_law", model.hardening.spring_law(c_struct, c_mesh))
         # stiffness at zero twist: the dead zone's stiffness in contact and the damping reference
-        base_tangent = model.hardening.tangent(0.0, c_struct, c_mesh)
-        object.__setattr__(self, "base_tangent", float(base_tangent) if np.ndim(base_tangent) == 0 else base_tangent)
+        object.__setattr__(self, "base_tangent", float_if_scalar(model.hardening.tangent(0.0, c_struct, c_mesh)))
         object.__setattr__(self, "n_friction", len(model.friction.state_names))
         # asked at every evaluation of the right-hand side; the effect does not change
         object.__setattr__(self, "damping_follows_stiffness", model.damping.follows_stiffness)

@@ -445,7 +445,7 @@ class DahlSlip(Friction):
         if isinstance(body_rate, float) and isinstance(states[0], float) and np.size(torque) == 1:
             # a single model's right-hand side: the one slider as Python floats
             torque, reach, stiffness = (v if isinstance(v, float) else float(v[0]) for v in (torque, reach, stiffness))
-            return (fr.dahl_slip_rates(float(states[0]), body_rate, float(spring_tangent), float(spring_torque),
+            return (fr.dahl_slip_rates(states[0], body_rate, float(spring_tangent), float(spring_torque),
                                        torque, reach, stiffness, 0.02 * reach, self.velocity_scale),)
         return tuple(fr.dahl_slip_rates(_states(states), body_rate, spring_tangent, spring_torque, torque, reach,
                                         stiffness, 0.02 * reach, self.velocity_scale))
