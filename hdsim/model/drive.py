@@ -10,6 +10,7 @@ integrates for all parameter sets at once.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field, fields, replace
 from typing import ClassVar
 
@@ -149,6 +150,13 @@ def compliance_chain(g: FlexsplineGeometry, wg: WaveGenerator, kappa_mesh=1.0) -
     )
 
 
+@functools.lru_cache(maxsize=None)
+def _dotted_names(parts: tuple) -> frozenset:
+    """The dotted parameter names of holders ``((prefix, class), …)``: a class's numeric
+    fields are the same for every instance, and a fit asks at every pass."""
+    return frozenset(f"{prefix}.{f.name}" for prefix, cls in parts for f in fields(cls) if f.metadata)
+
+
 _COMPONENTS = {"flexspline": "geometry", "wave_generator": "wave_generator", "drive": "drive",
                "calibration": "calibration", "input_friction": "input_friction"}
 
@@ -254,11 +262,11 @@ class HarmonicDrive:
 
     def with_updates(self, updates: dict) -> "HarmonicDrive":
         """A new model with ``{dotted name: value}`` changed; values may be arrays (a batch)."""
-        known = self.params()
+        known = _dotted_names(tuple((prefix, type(part)) for prefix, part in self._parts().items()))
         grouped: dict[str, dict] = {}
         for name, value in updates.items():
             if name not in known:
-                raise unknown_name("parameter", name, known)
+                raise unknown_name("parameter", name, self.params())
             prefix, _, attr = name.partition(".")
             if isinstance(value, (list, tuple, np.ndarray)):  # a batch: the parameter holders compute on arrays
                 value = _as_float_array(prefix, attr, value)
@@ -273,7 +281,7 @@ class HarmonicDrive:
         model.batch_size  # arrays of different lengths are refused here, with their names' lengths
         return model
 
-    @property
+    @functools.cached_property  # frozen: an optimiser's pass asks a model for it several times
     def batch_size(self) -> int:
         """1 for a single model, else the common length of its array parameters."""
         sizes = {np.size(v) for v in self.params().values()}

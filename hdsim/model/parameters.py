@@ -8,6 +8,7 @@ the fit's parameter transforms and the messages a user sees.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import MISSING, field, fields
 from typing import ClassVar
 
@@ -57,6 +58,14 @@ def float_if_scalar(value):
     return float(value) if np.ndim(value) == 0 else value
 
 
+@functools.lru_cache(maxsize=None)
+def _checked_fields(cls) -> tuple:
+    """(name, lower, upper, positive, unit) of every numeric field of ``cls``: the same for
+    every instance, and a fit builds thousands of instances."""
+    return tuple((f.name, *f.metadata["bounds"], f.metadata["positive"], f.metadata["unit"])
+                 for f in fields(cls) if f.metadata)
+
+
 class Parameters:
     """Base of every parameter holder: bound checks on construction, field listing.
 
@@ -68,22 +77,19 @@ class Parameters:
     prefix: ClassVar[str] = ""
 
     def __post_init__(self):
-        for f in fields(self):
-            if not f.metadata:
-                continue
-            value = _as_float_array(self.prefix, f.name, getattr(self, f.name))
-            lower, upper = f.metadata["bounds"]
+        for name, lower, upper, positive, unit in _checked_fields(type(self)):
+            raw = getattr(self, name)
+            value = _as_float_array(self.prefix, name, raw)
             bad = ~np.isfinite(value) | (value < lower) | (value > upper)
             bound = f"[{lower:g}, {upper:g}]"
-            if f.metadata["positive"]:
+            if positive:
                 bad |= value <= 0.0
                 bound = f"({lower:g}, {upper:g}]" if lower <= 0.0 else bound
             if np.any(bad):
                 first = np.atleast_1d(value)[np.argmax(np.atleast_1d(bad))]
-                raise InputError(f"{self.prefix}.{f.name} = {first:g} is outside {bound} {f.metadata['unit']}")
-            raw = getattr(self, f.name)
+                raise InputError(f"{self.prefix}.{name} = {first:g} is outside {bound} {unit}")
             if not isinstance(raw, int):  # a given int stays as written
-                object.__setattr__(self, f.name, float_if_scalar(raw))
+                object.__setattr__(self, name, float_if_scalar(raw))
 
     def params(self) -> dict:
         """Every numeric field by name."""
