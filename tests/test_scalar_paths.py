@@ -11,12 +11,15 @@ relative to the law's scale, not to the value. A wrong branch differs by far mor
 """
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 import pytest
 
+from hdsim.errors import InputError
 from hdsim.model import effects as fx
 from hdsim.model.catalog import load_unit
+from hdsim.model.parameters import Parameters, param
 from hdsim.physics import backlash as bl
 from hdsim.physics import smooth
 from hdsim.physics import stiffness as st
@@ -197,3 +200,26 @@ def test_numpy_scalars_become_floats_and_arrays_stay_arrays():
     assert type(model.friction.slip_torque) is float and model.friction.slip_torque == 3.0
     batch = load_unit().with_updates({"damping.coefficient": np.array([2.0, 3.0])})
     assert isinstance(batch.damping.coefficient, np.ndarray) and batch.damping.coefficient.shape == (2,)
+
+
+@dataclass(frozen=True)
+class _Holder(Parameters):
+    prefix = "holder"
+    bounded: float = param("a value in [0, 10]", "-", 0.0, 10.0)
+    positive: float = param("a value in (0, inf)", "-", positive=True, default=1.0)
+
+
+@pytest.mark.parametrize("field_name, value, refused", [
+    ("bounded", 5.0, False), ("bounded", 0.0, False), ("bounded", 10.0, False), ("bounded", -1e-12, True),
+    ("bounded", 10.5, True), ("bounded", math.nan, True), ("positive", math.inf, True), ("positive", 0.0, True),
+    ("positive", -0.0, True), ("positive", 1e-300, False)])
+def test_a_float_is_checked_against_its_bounds_as_an_array_is(field_name, value, refused):
+    """The float path of the bound check (no numpy) refuses what the array path refuses."""
+    base = {"bounded": 1.0, "positive": 1.0}
+    for given in (value, np.array([1.0, value])):
+        kwargs = {**base, field_name: given}
+        if refused:
+            with pytest.raises(InputError, match=f"holder.{field_name} = .* is outside"):
+                _Holder(**kwargs)
+        else:
+            assert np.all(getattr(_Holder(**kwargs), field_name) == given)

@@ -17,7 +17,7 @@ from typing import ClassVar
 import numpy as np
 
 from hdsim.model import effects as fx
-from hdsim.model.parameters import Parameters, _as_float_array, param
+from hdsim.model.parameters import Parameters, _as_float_array, numeric_fields, param
 from hdsim.errors import InputError, unknown_name
 from hdsim.model.geometry import FlexsplineGeometry
 from hdsim.model.input_friction import InputFriction, catalog_friction
@@ -154,7 +154,7 @@ def compliance_chain(g: FlexsplineGeometry, wg: WaveGenerator, kappa_mesh=1.0) -
 def _dotted_names(parts: tuple) -> frozenset:
     """The dotted parameter names of holders ``((prefix, class), …)``: a class's numeric
     fields are the same for every instance, and a fit asks at every pass."""
-    return frozenset(f"{prefix}.{f.name}" for prefix, cls in parts for f in fields(cls) if f.metadata)
+    return frozenset(f"{prefix}.{name}" for prefix, cls in parts for name in numeric_fields(cls))
 
 
 _COMPONENTS = {"flexspline": "geometry", "wave_generator": "wave_generator", "drive": "drive",
@@ -244,12 +244,8 @@ class HarmonicDrive:
 
     def params(self) -> dict[str, float]:
         """Every numeric parameter by dotted name."""
-        out = {}
-        for prefix, part in self._parts().items():
-            for f in fields(part):
-                if f.metadata:
-                    out[f"{prefix}.{f.name}"] = getattr(part, f.name)
-        return out
+        return {f"{prefix}.{name}": getattr(part, name) for prefix, part in self._parts().items()
+                for name in numeric_fields(type(part))}
 
     def param_info(self, name: str) -> dict:
         """Metadata of one dotted parameter: ``doc``, ``unit`` and, where known, ``bounds``."""
@@ -284,7 +280,7 @@ class HarmonicDrive:
     @functools.cached_property  # frozen: an optimiser's pass asks a model for it several times
     def batch_size(self) -> int:
         """1 for a single model, else the common length of its array parameters."""
-        sizes = {np.size(v) for v in self.params().values()}
+        sizes = {1 if type(v) is float else np.size(v) for v in self.params().values()}
         sizes.discard(1)
         if len(sizes) > 1:
             raise InputError(f"batch parameters have different lengths {sorted(sizes)}")

@@ -9,6 +9,7 @@ the fit's parameter transforms and the messages a user sees.
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import MISSING, field, fields
 from typing import ClassVar
 
@@ -59,6 +60,12 @@ def float_if_scalar(value):
 
 
 @functools.lru_cache(maxsize=None)
+def numeric_fields(cls) -> tuple[str, ...]:
+    """The names of the numeric parameter fields (those made by `param`) of dataclass ``cls``."""
+    return tuple(f.name for f in fields(cls) if f.metadata)
+
+
+@functools.lru_cache(maxsize=None)
 def _checked_fields(cls) -> tuple:
     """(name, lower, upper, positive, unit) of every numeric field of ``cls``: the same for
     every instance, and a fit builds thousands of instances."""
@@ -79,6 +86,8 @@ class Parameters:
     def __post_init__(self):
         for name, lower, upper, positive, unit in _checked_fields(type(self)):
             raw = getattr(self, name)
+            if type(raw) is float and lower <= raw <= upper and (raw > 0.0 or not positive) and math.isfinite(raw):
+                continue  # a single model's float within its bounds (the common case, without numpy)
             value = _as_float_array(self.prefix, name, raw)
             bad = ~np.isfinite(value) | (value < lower) | (value > upper)
             bound = f"[{lower:g}, {upper:g}]"
@@ -93,7 +102,7 @@ class Parameters:
 
     def params(self) -> dict:
         """Every numeric field by name."""
-        return {f.name: getattr(self, f.name) for f in fields(self) if f.metadata}
+        return {name: getattr(self, name) for name in numeric_fields(type(self))}
 
     @classmethod
     def param_meta(cls) -> dict:
