@@ -53,6 +53,7 @@ instead). Temperature is not modelled: the catalog figures are those at +20 °C.
 from __future__ import annotations
 
 import functools
+import math
 import tomllib
 from dataclasses import dataclass, fields, replace
 from importlib import resources
@@ -61,7 +62,7 @@ from typing import ClassVar
 import numpy as np
 
 from hdsim.errors import InputError, unknown_name
-from hdsim.model.parameters import Parameters, _as_float_array, param
+from hdsim.model.parameters import Parameters, _as_float_array, checked_fields, param
 from hdsim.physics.elementary import cos, exp, tanh
 from hdsim.units import rpm_to_rad_per_s
 
@@ -98,12 +99,14 @@ class InputFriction(Parameters):
 
     def __post_init__(self):
         # NaN fails every comparison and inf is refused by name: "finite" says which was wrong
-        for name, meta in self.param_meta().items():
-            value = _as_float_array(self.prefix, name, getattr(self, name))
-            lower = meta["bounds"][0]
-            ok = np.isfinite(value) & ((value > lower) if meta["positive"] else (value >= lower))
+        for name, lower, _, positive, _ in checked_fields(type(self)):
+            raw = getattr(self, name)
+            if type(raw) is float and math.isfinite(raw) and (raw > lower if positive else raw >= lower):
+                continue  # one law's float (the common case, without numpy)
+            value = _as_float_array(self.prefix, name, raw)
+            ok = np.isfinite(value) & ((value > lower) if positive else (value >= lower))
             if not np.all(ok):
-                limit = "" if lower == -np.inf else f" {'>' if meta['positive'] else '>='} {lower:g}"
+                limit = "" if lower == -np.inf else f" {'>' if positive else '>='} {lower:g}"
                 first = np.atleast_1d(value)[np.argmin(np.atleast_1d(ok))]
                 raise InputError(f"input_friction.{name} must be a finite number{limit}, got {first:g}")
         if not len(self.ripple_orders) == len(self.ripple_amplitudes) == len(self.ripple_phases):

@@ -66,7 +66,7 @@ def numeric_fields(cls) -> tuple[str, ...]:
 
 
 @functools.lru_cache(maxsize=None)
-def _checked_fields(cls) -> tuple:
+def checked_fields(cls) -> tuple:
     """(name, lower, upper, positive, unit) of every numeric field of ``cls``: the same for
     every instance, and a fit builds thousands of instances."""
     return tuple((f.name, *f.metadata["bounds"], f.metadata["positive"], f.metadata["unit"])
@@ -84,7 +84,7 @@ class Parameters:
     prefix: ClassVar[str] = ""
 
     def __post_init__(self):
-        for name, lower, upper, positive, unit in _checked_fields(type(self)):
+        for name, lower, upper, positive, unit in checked_fields(type(self)):
             raw = getattr(self, name)
             if type(raw) is float and lower <= raw <= upper and (raw > 0.0 or not positive) and math.isfinite(raw):
                 continue  # a single model's float within its bounds (the common case, without numpy)
