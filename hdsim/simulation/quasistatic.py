@@ -380,7 +380,10 @@ def _solve(kern, guess, e0, s0, torque, rate, tol_T, x_tol, max_iter, x_scale):
 
     Plain Newton steps first; if they have not converged after three, the iteration
     keeps a bracket (the balance is increasing in e) and bisects when a Newton step
-    leaves it, with unbracketed steps limited to a few expected increments.
+    leaves it, with unbracketed steps limited to a few expected increments. A row that
+    has a bracket but is still not solved after ``max_iter`` steps is bisected on it
+    (`_bisect_bracket`): where a friction law's analytic slope is not its sub-stepped
+    step's, Newton steps land inside the bracket on alternate sides and crawl.
     """
     x = guess
     lo = hi = None
@@ -407,8 +410,30 @@ def _solve(kern, guess, e0, s0, torque, rate, tol_T, x_tol, max_iter, x_scale):
         if np.abs(step).max() <= x_tol:
             break
     solved = (np.abs(step) <= x_tol) | (np.abs(g) <= tol_T)
+    if lo is not None and not np.all(solved):
+        x, u, k, solved = _bisect_bracket(kern, x, u, k, solved, lo, hi, e0, s0, torque, rate, tol_T, x_tol,
+                                          max_iter)
     s = kern.friction.advance(s0, e0, x, kern.spring) if kern.n_states else s0
     return x, s, u, k, solved & np.isfinite(x)
+
+
+def _bisect_bracket(kern, x, u, k, solved, lo, hi, e0, s0, torque, rate, tol_T, x_tol, max_iter):
+    """Bisect the unsolved rows that hold a bracket (``lo < root < hi``) until the balance
+    residual is below ``tol_T`` or the bracket narrower than ``2 x_tol``; the solved rows are
+    left exactly as they are. Returns (x, u, k, solved)."""
+    rows = ~solved & np.isfinite(lo) & np.isfinite(hi)
+    for _ in range(max_iter):
+        if not rows.any():
+            break
+        mid = np.where(rows, 0.5 * (lo + hi), x)
+        g, _, u_mid, k_mid = kern.balance(mid, e0, s0, torque, rate)
+        x, u, k = np.where(rows, mid, x), np.where(rows, u_mid, u), np.where(rows, k_mid, k)
+        lo = np.where(rows & (g < 0.0), mid, lo)
+        hi = np.where(rows & (g > 0.0), mid, hi)
+        done = rows & ((np.abs(g) <= tol_T) | (hi - lo <= 2.0 * x_tol))
+        solved = solved | done
+        rows = rows & ~done
+    return x, u, k, solved
 
 
 def _interp_rows(t, tg, values):

@@ -41,7 +41,8 @@ def _newton(spring, friction_step, ph, pf, e0, s0, s_out, guess, torque, cb, gdT
     """One step's balance ``u(e) + friction(e) + cb (e − e0) + gdT = T`` by Newton's method.
 
     The scalar form of `hdsim.simulation.quasistatic._solve`: plain Newton steps first,
-    then a bracket with bisection and steps limited to a few expected increments.
+    then a bracket with bisection and steps limited to a few expected increments, and a
+    step still unsolved after ``max_iter`` is bisected on its bracket.
     Returns (e, spring torque, spring tangent, 1.0 if solved else 0.0) and writes the
     friction states at e to ``s_out``.
     """
@@ -73,6 +74,18 @@ def _newton(spring, friction_step, ph, pf, e0, s0, s_out, guess, torque, cb, gdT
         if abs(step) <= x_tol:
             break
     solved = (abs(step) <= x_tol or abs(g) <= tol_T) and math.isfinite(x)
+    if not solved and math.isfinite(lo) and math.isfinite(hi):  # crawling inside its bracket: bisect it
+        for it in range(max_iter):
+            x = 0.5 * (lo + hi)
+            body, slope, u, k = friction_step(spring, ph, s0, e0, x, 1.0 if x - e0 >= 0.0 else -1.0, pf, s_out)
+            g = body + cb * (x - e0) + gdT - torque
+            if g < 0.0:
+                lo = x
+            elif g > 0.0:
+                hi = x
+            if abs(g) <= tol_T or hi - lo <= 2.0 * x_tol:
+                solved = True
+                break
     friction_step(spring, ph, s0, e0, x, 1.0 if x - e0 >= 0.0 else -1.0, pf, s_out)
     return x, u, k, 1.0 if solved else 0.0
 
