@@ -407,7 +407,9 @@ def _solve(kern, guess, e0, s0, torque, rate, tol_T, x_tol, max_iter, x_scale):
             base = np.where(both, base, 2.0 * base)
             step = np.where(np.abs(g) <= tol_T, 0.0, xn - x)
         x = x + step
-        if np.abs(step).max() <= x_tol:
+        # a row whose balance is not finite is lost (the caller gets NaN for it): it must not
+        # keep the batch iterating to max_iter at every step, as the compiled loop's rows don't
+        if np.all((np.abs(step) <= x_tol) | ~np.isfinite(step)):
             break
     solved = (np.abs(step) <= x_tol) | (np.abs(g) <= tol_T)
     if lo is not None and not np.all(solved):
