@@ -21,8 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["NOISE_WINDOW", "RATE_STEP", "local_cubic_weights", "noise_level", "smoothed", "turning_points",
-           "torque_legs", "loading_direction", "loading_rates", "rate_groups", "Breakaway", "angle_resolution",
-           "breakaway_episodes"]
+           "torque_legs", "loading_direction", "loading_rates", "row_loading_rates", "rate_groups", "Breakaway",
+           "angle_resolution", "breakaway_episodes"]
 
 #: samples of the local cubic fit that the noise estimate subtracts
 NOISE_WINDOW = 7
@@ -109,15 +109,29 @@ def loading_direction(time, torque) -> tuple[np.ndarray, np.ndarray]:
     return sign, np.abs(np.gradient(smooth, np.asarray(time, dtype=float)))
 
 
+def _leg_rates(time, smooth_torque, turns):
+    """(first row, end row, mean |dT/dt| [N·m/s]) of each monotone leg between turning points
+    (legs of more than two samples that take time)."""
+    t = np.asarray(time, dtype=float)
+    for a, b in zip(turns[:-1], turns[1:]):
+        if b - a > 2 and t[b - 1] > t[a]:
+            yield a, b, abs(smooth_torque[b - 1] - smooth_torque[a]) / (t[b - 1] - t[a])
+
+
 def loading_rates(time, smooth_torque, turns) -> np.ndarray:
     """Mean |dT/dt| [N·m/s] of each monotone leg between turning points (legs of more than
     two samples that take time)."""
-    t = np.asarray(time, dtype=float)
-    rates = []
-    for a, b in zip(turns[:-1], turns[1:]):
-        if b - a > 2 and t[b - 1] > t[a]:
-            rates.append(abs(smooth_torque[b - 1] - smooth_torque[a]) / (t[b - 1] - t[a]))
-    return np.array(rates)
+    return np.array([rate for _, _, rate in _leg_rates(time, smooth_torque, turns)])
+
+
+def row_loading_rates(time, torque) -> np.ndarray:
+    """Each row's loading rate: the mean |dT/dt| of its monotone leg [N·m/s] (`loading_rates`),
+    0 on a leg too short to have one."""
+    smooth, turns = torque_legs(torque)
+    out = np.zeros(smooth.size)
+    for a, b, rate in _leg_rates(time, smooth, turns):
+        out[a:b] = rate
+    return out
 
 
 def rate_groups(values, step: float = RATE_STEP) -> list[float]:

@@ -5,6 +5,7 @@ plot of a record with one loading rate)."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import truth
 from hdsim.identification.diagnosis import diagnose
 from hdsim.io.measurement import make_measurement
@@ -124,3 +125,32 @@ def test_a_sweeps_law_is_shown_to_four_digits_with_its_ripple_in_newton_metres()
     assert rows["Coulomb level F_c"] == (f"{level:.4g}", "N·m")
     assert rows["ripple amplitudes"] == (f"{level * 0.022396766274298555:.4g}, {level * 0.1122728892558:.4g}", "N·m")
     assert rows["starting torque F_s"][0] == "0.07696" and rows["position torque orders"][0] == "none"
+
+
+def test_a_loop_that_widens_with_the_loading_rate_is_found_when_most_rows_load_slowly():
+    """Two slow cycles and two fast ones, sampled alike, so three rows in four load slowly:
+    a residual loop whose half-width grows with the rate (a ``−a·dT/dt`` lag, as damping
+    leaves) is told as one ``2a(R_fast − R_slow)`` wider at the fast rate."""
+    import re
+
+    from hdsim.identification.residuals import findings
+    from hdsim.io.measurement import make_measurement
+    from hdsim.units import ARCSEC_PER_RAD
+
+    amplitude, slow, fast, fs = 80.0, 80.0, 320.0, 400.0
+    legs = [(slow, 1.0 if k % 2 == 0 else -1.0) for k in range(8)] + [(fast, 1.0 if k % 2 == 0 else -1.0)
+                                                                        for k in range(8)]
+    torque, rate = [0.0], []
+    for speed, sign in legs:  # each leg from one peak to the other (the first from zero)
+        target = sign * amplitude
+        n = int(round(abs(target - torque[-1]) / speed * fs))
+        torque += list(np.linspace(torque[-1], target, n + 1)[1:])
+        rate += [sign * speed] * n
+    torque, rate = np.array(torque[1:]), np.array(rate)
+    time = np.arange(torque.size) / fs
+    a = 1e-7  # rad per N·m/s
+    meas = make_measurement("stiffness", time, torque, torque / 3e4, rated_torque=87.0)
+    said = [s for s in findings(meas, -a * rate, floor=1e-7) if "at the fast loading rate" in s]
+    assert len(said) == 1 and "wider" in said[0], said
+    width = float(re.search(r"loop is ([\d.]+) arcsec", said[0]).group(1))
+    assert width == pytest.approx(2 * a * (fast - slow) * ARCSEC_PER_RAD, rel=0.1)

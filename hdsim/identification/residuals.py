@@ -27,7 +27,7 @@ import numpy as np
 # the χ² tail from scipy.special: scipy.stats would add 0.8 s to every `hdsim diagnose`
 from scipy.special import chdtrc
 
-from hdsim.signals import loading_direction
+from hdsim.signals import loading_direction, rate_groups, row_loading_rates
 from hdsim.units import ARCMIN_PER_RAD, ARCSEC_PER_RAD
 
 __all__ = ["ljung_box", "noise_floor", "whiteness", "views", "findings", "order_spectrum",
@@ -199,7 +199,7 @@ def findings(meas, residual, max_items: int = 5, floor: float | None = None) -> 
     """
     r = np.asarray(residual, dtype=float)
     T = np.asarray(meas.torque, dtype=float)
-    direction, rate = loading_direction(meas.time, meas.torque)
+    direction, _ = loading_direction(meas.time, meas.torque)
     Tmax = max(float(np.max(np.abs(T))), 1e-12)
     rms = float(np.sqrt(np.mean(r * r)))
     out: list[tuple[float, str]] = []
@@ -227,10 +227,15 @@ def findings(meas, residual, max_items: int = 5, floor: float | None = None) -> 
         out.append((abs(gap), f"loading and unloading branches of the residual differ by "
                               f"{arcsec(gap)}: a hysteresis loop the model does not have "
                               f"(friction, or damping if it grows with the loading rate)"))
-    # rate dependence of the loop
-    if np.count_nonzero(rate > 0) > 10:
-        fast = rate > np.median(rate[rate > 0]) * 1.5
-        slow = rate < np.median(rate[rate > 0]) / 1.5
+    # rate dependence of the loop: the rows of legs loaded faster and slower than midway
+    # (geometric) between the record's slowest and fastest loading rates, when it has two or
+    # more (`hdsim.signals.rate_groups`). Not the rows' median: when most rows load slowly it
+    # is the slow rate itself, and a fast leg's turning points would count as slow rows.
+    leg_rate = row_loading_rates(meas.time, T)
+    groups = rate_groups(leg_rate)
+    if len(groups) >= 2:
+        split = math.sqrt(groups[0] * groups[-1])
+        fast, slow = leg_rate > split, (leg_rate > 0) & (leg_rate < split)
         if np.count_nonzero(fast) > 10 and np.count_nonzero(slow) > 10:
             w_fast = _band_mean(fast & (direction < 0), r) - _band_mean(fast & (direction > 0), r)
             w_slow = _band_mean(slow & (direction < 0), r) - _band_mean(slow & (direction > 0), r)
