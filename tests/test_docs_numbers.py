@@ -155,3 +155,18 @@ def test_the_physics_pages_table_of_the_five_units_is_what_the_demo_gives():
         metrics = _demo_metrics(run_scenario(unit, "lost_motion"), run_scenario(unit, "stiffness"), unit)
         for column, quoted in zip(UNIT_COLUMNS, row[1:]):
             assert _agrees(quoted, metrics[column]), (row[0], column, quoted, metrics[column])
+
+
+def test_the_kinematic_error_tutorials_json_is_what_the_contract_run_gives(ke_run):
+    """The metrics of the tutorial's ``hdsim simulate scenarios/kinematic_error.toml --unit
+    CSG-25-100 --json`` block are the contract run's (the session's shared one), to the digits
+    the page prints: the number check above leaves ``--json`` blocks out."""
+    page = (ROOT / "docs" / "tutorial-kinematic-error.md").read_text(encoding="utf-8")
+    block = re.search(r"hdsim simulate scenarios/kinematic_error\.toml --unit CSG-25-100 --json\n```\s*"
+                      r"```console\n(.*?)```", page, re.DOTALL)
+    assert block, "the tutorial's --json block of the contract run is gone"
+    quoted = dict(re.findall(r'"(\w+)": (-?\d[\d.]*)', block.group(1).split('"metrics":', 1)[1]))
+    assert len(quoted) == len(ke_run.metrics), sorted(quoted)
+    for name, number in quoted.items():
+        value = float(ke_run.metrics[name][0])
+        assert _agrees(number, value), f"the page says {name} {number}, the run gives {value:.6g}"
