@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["NOISE_WINDOW", "RATE_STEP", "local_cubic_weights", "noise_level", "smoothed", "turning_points",
-           "torque_legs", "loading_direction", "loading_rates", "row_loading_rates", "rate_groups", "Breakaway",
+           "torque_legs", "loading_direction", "loading_rates", "leg_loading", "rate_groups", "Breakaway",
            "angle_resolution", "breakaway_episodes"]
 
 #: samples of the local cubic fit that the noise estimate subtracts
@@ -99,14 +99,19 @@ def torque_legs(torque) -> tuple[np.ndarray, list[int]]:
     return smooth, turning_points(smooth, band)
 
 
+def _leg_signs(smooth_torque, turns) -> np.ndarray:
+    """+1 on rows of a leg loading up, −1 down (0 on a leg of one sample)."""
+    sign = np.zeros(smooth_torque.size)
+    for a, b in zip(turns[:-1], turns[1:]):
+        sign[a:b] = np.sign(smooth_torque[b - 1] - smooth_torque[a]) if b - a > 1 else 0.0
+    return sign
+
+
 def loading_direction(time, torque) -> tuple[np.ndarray, np.ndarray]:
     """(sign, magnitude) of the loading at each sample: +1 loading up, −1 down, the sign of
     the leg between turning points (`torque_legs`), and |dT/dt| of the smoothed torque [N·m/s]."""
     smooth, turns = torque_legs(torque)
-    sign = np.zeros(smooth.size)
-    for a, b in zip(turns[:-1], turns[1:]):
-        sign[a:b] = np.sign(smooth[b - 1] - smooth[a]) if b - a > 1 else 0.0
-    return sign, np.abs(np.gradient(smooth, np.asarray(time, dtype=float)))
+    return _leg_signs(smooth, turns), np.abs(np.gradient(smooth, np.asarray(time, dtype=float)))
 
 
 def _leg_rates(time, smooth_torque, turns):
@@ -124,14 +129,14 @@ def loading_rates(time, smooth_torque, turns) -> np.ndarray:
     return np.array([rate for _, _, rate in _leg_rates(time, smooth_torque, turns)])
 
 
-def row_loading_rates(time, torque) -> np.ndarray:
-    """Each row's loading rate: the mean |dT/dt| of its monotone leg [N·m/s] (`loading_rates`),
-    0 on a leg too short to have one."""
+def leg_loading(time, torque) -> tuple[np.ndarray, np.ndarray]:
+    """(sign, rate) of each row's leg: the sign as `loading_direction` gives it, and the
+    leg's mean |dT/dt| [N·m/s] (`loading_rates`), 0 on a leg too short to have one."""
     smooth, turns = torque_legs(torque)
-    out = np.zeros(smooth.size)
-    for a, b, rate in _leg_rates(time, smooth, turns):
-        out[a:b] = rate
-    return out
+    rate = np.zeros(smooth.size)
+    for a, b, leg_rate in _leg_rates(time, smooth, turns):
+        rate[a:b] = leg_rate
+    return _leg_signs(smooth, turns), rate
 
 
 def rate_groups(values, step: float = RATE_STEP) -> list[float]:

@@ -27,7 +27,7 @@ import numpy as np
 # the χ² tail from scipy.special: scipy.stats would add 0.8 s to every `hdsim diagnose`
 from scipy.special import chdtrc
 
-from hdsim.signals import loading_direction, rate_groups, row_loading_rates
+from hdsim.signals import leg_loading, loading_direction, rate_groups
 from hdsim.units import ARCMIN_PER_RAD, ARCSEC_PER_RAD
 
 __all__ = ["ljung_box", "noise_floor", "whiteness", "views", "findings", "order_spectrum",
@@ -199,7 +199,7 @@ def findings(meas, residual, max_items: int = 5, floor: float | None = None) -> 
     """
     r = np.asarray(residual, dtype=float)
     T = np.asarray(meas.torque, dtype=float)
-    direction, _ = loading_direction(meas.time, meas.torque)
+    direction, leg_rate = leg_loading(meas.time, T)
     Tmax = max(float(np.max(np.abs(T))), 1e-12)
     rms = float(np.sqrt(np.mean(r * r)))
     out: list[tuple[float, str]] = []
@@ -231,7 +231,6 @@ def findings(meas, residual, max_items: int = 5, floor: float | None = None) -> 
     # (geometric) between the record's slowest and fastest loading rates, when it has two or
     # more (`hdsim.signals.rate_groups`). Not the rows' median: when most rows load slowly it
     # is the slow rate itself, and a fast leg's turning points would count as slow rows.
-    leg_rate = row_loading_rates(meas.time, T)
     groups = rate_groups(leg_rate)
     if len(groups) >= 2:
         split = math.sqrt(groups[0] * groups[-1])
