@@ -467,15 +467,19 @@ def test_an_optimiser_trial_far_out_is_still_a_valid_model(K0, ratio):
 def test_a_second_friction_start_escapes_the_basin_of_a_reversing_ke_run(tmp_path):
     """Independent truth (the zoo's LuGre friction holding the body's windup, a hard gap,
     a brake load reversing with the output): from the data's start values alone the fit
-    of backlash + friction + kinematic error stops 17.9 arcsec rms from the record; the
+    of backlash + friction + kinematic error stops 14.8 arcsec rms from the record; the
     friction's second start (half the largest torque, `Effect.other_starts`) reaches
-    3.6 arcsec (LuGre's stiction is not Dahl's). Zoo seed 5; on seed 0, where the basin
-    was first seen (44 against 4.7 arcsec), the single start has reached 5.1 arcsec since
-    the evaluator's step grid comes from the torque alone, and of 18 such records (seeds
-    0-5, three profiles) two still need the second start."""
+    4.9 arcsec (LuGre's stiction is not Dahl's). Zoo seed 4, two equal rates.
+
+    The basin grows rarer as the evaluator gets surer: first seen on one-rate seed 0 (44
+    against 4.7 arcsec), it went once the step grid came from the torque alone, and on
+    one-rate seed 5 (17.9 against 3.6) once a step Newton leaves unsolved is bisected on
+    its bracket (the single start now ends at 4.6 against 3.3). Of 36 such records
+    (seeds 0-11; one rate, two equal rates, sine) this one still needs the second start,
+    one more fits 2x better with it (two equal rates, seed 8), and none fits worse."""
     import truth_zoo as tz
 
-    cols, meta, _ = tz.make_case({"kinematic_error": "with_windup"}, {"backlash": "hard_gap"}, "one_rate", 5,
+    cols, meta, _ = tz.make_case({"kinematic_error": "with_windup"}, {"backlash": "hard_gap"}, "two_rates_equal", 4,
                                  max_rows=6000)
     path = tmp_path / "ke.csv"
     tz.write_csv(path, cols, meta)
@@ -489,4 +493,4 @@ def test_a_second_friction_start_escapes_the_basin_of_a_reversing_ke_run(tmp_pat
         stuck = fit(meas, ["backlash", "friction", "kinematic_error"])
     finally:
         fx.DahlFriction.other_starts = alone
-    assert stuck.rmse_rad > 3.0 * res.rmse_rad
+    assert stuck.rmse_rad > 2.5 * res.rmse_rad  # 3.0x on this record
