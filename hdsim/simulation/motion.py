@@ -77,6 +77,21 @@ def hold_motion(t_end: float) -> Motion:
     return Motion(zero, zero, zero, float(t_end), {}, 0.0, "hold")
 
 
+def _segment_angle(s, a, b, d, linear: bool, sin):
+    """Angle [rad] gained a fraction ``s`` into a segment of ``d`` [s] from speed ``a`` to ``b``
+    [rad/s] (linear or cosine blend); ``sin``: `math.sin` for a float, `numpy.sin` for arrays."""
+    if linear:
+        return d * (a * s + 0.5 * (b - a) * s * s)
+    return d * (a * s + 0.5 * (b - a) * (s - sin(math.pi * s) / math.pi))
+
+
+def _segment_accel(s, a, b, d, linear: bool, sin):
+    """Acceleration [rad/s²] a fraction ``s`` into that segment."""
+    if linear:
+        return (b - a) / d
+    return 0.5 * (b - a) * math.pi / d * sin(math.pi * s)
+
+
 class SpeedKnots:
     """WG speed through knots with cosine or linear blends; the angle in closed form.
 
@@ -113,25 +128,17 @@ class SpeedKnots:
         i, s = segment_of(self._tlist, t)
         return i, s, self._vlist[i], self._vlist[i + 1], self._dlist[i]
 
-    def _speed_at(self, i, s, a, b, d):
+    def _speed_at(self, s, a, b):
         return a + (b - a) * (s if self.shape == "linear" else 0.5 * (1.0 - math.cos(math.pi * s)))
-
-    def _accel_at(self, t, i, s, a, b, d):
-        if t < self._tlist[0] or t > self._tlist[-1]:
-            return 0.0
-        return (b - a) / d if self.shape == "linear" else 0.5 * (b - a) * math.pi / d * math.sin(math.pi * s)
-
-    def _angle_at(self, t, i, s, a, b, d):
-        if self.shape == "linear":
-            part = d * (a * s + 0.5 * (b - a) * s * s)
-        else:
-            part = d * (a * s + 0.5 * (b - a) * (s - math.sin(math.pi * s) / math.pi))
-        return self._alist[i] + part + max(t - self._tlist[-1], 0.0) * self._vlist[-1]
 
     def kinematics(self, t: float) -> tuple:
         """(angle [rad], speed [rad/s], acceleration [rad/s²]) at the float ``t`` [s], one lookup."""
-        where = self._scalar(t)
-        return self._angle_at(t, *where), self._speed_at(*where), self._accel_at(t, *where)
+        i, s, a, b, d = self._scalar(t)
+        linear = self.shape == "linear"
+        beyond = max(t - self._tlist[-1], 0.0) * self._vlist[-1]
+        angle = self._alist[i] + _segment_angle(s, a, b, d, linear, math.sin) + beyond
+        inside = self._tlist[0] <= t <= self._tlist[-1]
+        return angle, self._speed_at(s, a, b), _segment_accel(s, a, b, d, linear, math.sin) if inside else 0.0
 
     def _locate(self, t):
         t = np.asarray(t, dtype=float)
@@ -142,7 +149,8 @@ class SpeedKnots:
     def speed(self, t):
         """WG speed [rad/s] at ``t`` [s] (a float or an array)."""
         if isinstance(t, float):
-            return self._speed_at(*self._scalar(t))
+            _, s, a, b, _ = self._scalar(t)
+            return self._speed_at(s, a, b)
         if self.shape != "linear":
             return self._cosine_speed(np.asarray(t, dtype=float))
         t, i, s, a, b, d = self._locate(t)
@@ -151,24 +159,18 @@ class SpeedKnots:
     def accel(self, t):
         """WG acceleration [rad/s²] at ``t`` [s]; 0 outside the knots."""
         if isinstance(t, float):
-            return self._accel_at(t, *self._scalar(t))
+            return self.kinematics(t)[2]
         t, i, s, a, b, d = self._locate(t)
         inside = (t >= self.times[0]) & (t <= self.times[-1])
-        if self.shape == "linear":
-            return np.where(inside, (b - a) / d, 0.0)
-        return np.where(inside, 0.5 * (b - a) * np.pi / d * np.sin(np.pi * s), 0.0)
+        return np.where(inside, _segment_accel(s, a, b, d, self.shape == "linear", np.sin), 0.0)
 
     def angle(self, t):
         """WG angle [rad] at ``t`` [s], 0 at the first knot; the last speed holds after the last knot."""
         if isinstance(t, float):
-            return self._angle_at(t, *self._scalar(t))
+            return self.kinematics(t)[0]
         t, i, s, a, b, d = self._locate(t)
-        if self.shape == "linear":
-            part = d * (a * s + 0.5 * (b - a) * s * s)
-        else:
-            part = d * (a * s + 0.5 * (b - a) * (s - np.sin(np.pi * s) / np.pi))
         beyond = np.maximum(t - self.times[-1], 0.0) * self.speeds[-1]
-        return self.angles[i] + part + beyond
+        return self.angles[i] + _segment_angle(s, a, b, d, self.shape == "linear", np.sin) + beyond
 
     def motion(self, windows: dict, description: str) -> Motion:
         """This profile as a `Motion` with the metric ``windows`` {name: (start, end) [s]}."""
