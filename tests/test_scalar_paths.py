@@ -93,8 +93,7 @@ def test_motion_and_load_at_one_time_are_their_separate_calls(shape):
     # (central differences, away from the knots where a linear profile's acceleration jumps)
     h = 1e-6
     for t in (0.05, 0.13, 0.41, 0.75):
-        (a0, _, _), (a1, _, _) = motion.at(t - h), motion.at(t + h)
-        (_, v0, _), (_, v1, _), (_, v, acc) = motion.at(t - h), motion.at(t + h), motion.at(t)
+        (a0, v0, _), (a1, v1, _), (_, v, acc) = motion.at(t - h), motion.at(t + h), motion.at(t)
         assert (a1 - a0) / (2 * h) == pytest.approx(v, rel=1e-6, abs=1e-6 * 300.0)
         assert (v1 - v0) / (2 * h) == pytest.approx(acc, rel=1e-4, abs=1e-4 * 1500.0)
         for load in loads:
