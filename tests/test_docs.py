@@ -71,3 +71,65 @@ def test_nomenclature_lists_every_parameter_of_the_default_unit():
     page = (ROOT / "docs" / "nomenclature.md").read_text(encoding="utf-8")
     absent = [name for name in load_unit().params() if f"`{name}`" not in page]
     assert not absent, f"docs/nomenclature.md does not list {absent}"
+
+
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+
+
+def _resolve(dotted: str):
+    """The object a dotted name ``hdsim.module.Name.attr`` names (the longest importable module,
+    then attributes)."""
+    import importlib
+
+    parts = dotted.split(".")
+    for k in range(len(parts), 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:k]))
+        except ImportError:
+            continue
+        for name in parts[k:]:
+            obj = getattr(obj, name)
+        return obj
+    raise ImportError(dotted)
+
+
+def test_every_hdsim_name_the_pages_give_exists():
+    """A name in backquotes, ``hdsim.physics.friction.dahl_slip_rates``, is importable: a page
+    that names a function renamed since fails here (mkdocs checks links, not code spans)."""
+    missing = []
+    for page in PAGES:
+        for name in sorted(set(re.findall(r"`(hdsim(?:\.\w+)+)(?:\(\))?`", page.read_text(encoding="utf-8")))):
+            try:
+                _resolve(name)
+            except (ImportError, AttributeError):
+                missing.append(f"{page.name}: {name}")
+    assert not missing, "names the code does not have:\n" + "\n".join(missing)
+
+
+def test_the_nomenclature_constants_are_the_classes_own():
+    """Each row of the fixed-constants table names a class constant that exists and holds the
+    value the row gives."""
+    from hdsim.model import effects
+
+    page = (ROOT / "docs" / "nomenclature.md").read_text(encoding="utf-8")
+    table = page.split("### Fixed numerical constants", 1)[1].split("\n## ", 1)[0]
+    rows = re.findall(r"^\| [^|]+ \| ([^|]+) \| `(\w+)\.(\w+)` \|$", table, re.MULTILINE)
+    assert len(rows) == 6, rows
+    for cell, cls, attr in rows:
+        # "$0.03\,T_1/K_1$" -> 0.03, "$10^{-6}$ rad/s" -> 1e-6, "4" -> 4
+        value = re.sub(r"10\^\{(-?\d+)\}", r"1e\1", cell.strip("$ ").split("\\,")[0].split("$")[0])
+        assert getattr(getattr(effects, cls), attr) == pytest.approx(float(value)), (cls, attr, cell)
+
+
+def test_every_code_fence_stands_on_a_line_of_its_own():
+    """A fence with text after it (a closing ```` ``` ```` followed by prose) leaves its block
+    open and swallows the page's next paragraphs into code."""
+    bad = []
+    for page in PAGES:
+        lines = page.read_text(encoding="utf-8").splitlines()
+        fences = [(i, line) for i, line in enumerate(lines, 1) if "```" in line]
+        bad += [f"{page.name}:{i}: {line.strip()}" for i, line in fences
+                if not re.fullmatch(r"\s*```[\w-]*(?: title=\"[^\"]*\")?", line)]
+        if len(fences) % 2:
+            bad.append(f"{page.name}: an odd number of fences ({len(fences)})")
+    assert not bad, "\n".join(bad)

@@ -48,14 +48,11 @@ def _agrees(quoted: str, value: float) -> bool:
     return abs(value - float(quoted)) <= digit + RESOLUTION * abs(value)
 
 
-@pytest.fixture
-def shared_default_runs(monkeypatch, default_lost_motion_run, default_stiffness_run):
-    """The verbs' runs of the default unit's shipped lost-motion and stiffness scenarios are the
-    session's (the same model and scenario, checked); any other run is made here."""
+def _share_runs(monkeypatch, shared: list) -> None:
+    """The verbs' runs of the models and scenarios of ``shared`` are those (the same model and
+    scenario, checked); any other run is made anew."""
     from hdsim.cli import demo, simulate
     from hdsim.scenarios.run import run_scenario
-
-    shared = [default_lost_motion_run, default_stiffness_run]
 
     def run(model, scenario, evaluator="dynamic"):
         for done in shared:
@@ -66,6 +63,12 @@ def shared_default_runs(monkeypatch, default_lost_motion_run, default_stiffness_
 
     monkeypatch.setattr(demo, "run_scenario", run)
     monkeypatch.setattr(simulate, "run_scenario", run)
+
+
+@pytest.fixture
+def shared_default_runs(monkeypatch, default_lost_motion_run, default_stiffness_run):
+    """The session's runs of the default unit's shipped lost-motion and stiffness scenarios."""
+    _share_runs(monkeypatch, [default_lost_motion_run, default_stiffness_run])
 
 
 @pytest.mark.parametrize("command, shown", _quoted_blocks())
@@ -157,16 +160,34 @@ def test_the_physics_pages_table_of_the_five_units_is_what_the_demo_gives():
             assert _agrees(quoted, metrics[column]), (row[0], column, quoted, metrics[column])
 
 
-def test_the_kinematic_error_tutorials_json_is_what_the_contract_run_gives(ke_run):
-    """The metrics of the tutorial's ``hdsim simulate scenarios/kinematic_error.toml --unit
-    CSG-25-100 --json`` block are the contract run's (the session's shared one), to the digits
-    the page prints: the number check above leaves ``--json`` blocks out."""
-    page = (ROOT / "docs" / "tutorial-kinematic-error.md").read_text(encoding="utf-8")
-    block = re.search(r"hdsim simulate scenarios/kinematic_error\.toml --unit CSG-25-100 --json\n```\s*"
-                      r"```console\n(.*?)```", page, re.DOTALL)
-    assert block, "the tutorial's --json block of the contract run is gone"
-    quoted = dict(re.findall(r'"(\w+)": (-?\d[\d.]*)', block.group(1).split('"metrics":', 1)[1]))
-    assert len(quoted) == len(ke_run.metrics), sorted(quoted)
+JSON_BLOCK = re.compile(r"```bash\n(hdsim simulate [^\n]*--json)\n```\s*```(?:console|json)\n(.*?)```", re.DOTALL)
+
+
+def _json_blocks():
+    return [pytest.param(m.group(1), m.group(2), id=f"{page.name}: {m.group(1)}")
+            for page in PAGES for m in JSON_BLOCK.finditer(page.read_text(encoding="utf-8"))]
+
+
+@pytest.mark.parametrize("command, shown", _json_blocks())
+def test_a_json_block_of_the_docs_is_what_the_command_prints(command, shown, cli, tmp_path, monkeypatch,
+                                                             default_lost_motion_run, ke_run):
+    """The object a page shows for ``hdsim simulate … --json`` (line breaks added, digits cut)
+    has the keys the command prints, the same files, and every metric to the digits shown."""
+    import json
+
+    _share_runs(monkeypatch, [default_lost_motion_run, ke_run])
+    args = [a.replace("scenarios/", str(ROOT / "scenarios") + "/") for a in command.split()[1:]]
+    code, out, err = cli(*args, cwd=tmp_path)
+    assert code == 0, err
+    printed, page = json.loads(out), json.loads(shown)
+    assert list(page) == list(printed), f"{command}: the page shows keys {list(page)}, it prints {list(printed)}"
+    assert page["files"] == printed["files"] and page["result"] == printed["result"], command
+    assert list(page["metrics"]) == list(printed["metrics"]), command
+    quoted = dict(re.findall(r'"(\w+)": (-?\d[\d.]*)', shown.split('"metrics":', 1)[1].split("}", 1)[0]))
     for name, number in quoted.items():
-        value = float(ke_run.metrics[name][0])
-        assert _agrees(number, value), f"the page says {name} {number}, the run gives {value:.6g}"
+        assert _agrees(number, printed["metrics"][name]), \
+            f"{command}: the page says {name} {number}, it prints {printed['metrics'][name]:.6g}"
+
+
+def test_both_json_blocks_are_found():
+    assert len(_json_blocks()) == 2

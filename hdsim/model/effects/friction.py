@@ -427,6 +427,8 @@ class DahlSlip(Friction):
     stiffness_ratio: ClassVar[float] = 200.0
     #: direction switch smoothing [rad/s]: ~1e-3 of the twist rate of a catalog test
     velocity_scale: ClassVar[float] = 1e-6
+    #: rounding of the end stops as a share of the slip range (docs/physics.md §7.1)
+    stop_rounding: ClassVar[float] = 0.02
 
     def series_slip(self, states):
         return _first_state(states)
@@ -446,16 +448,16 @@ class DahlSlip(Friction):
             # a single model's right-hand side: the one slider as Python floats
             torque, reach, stiffness = (v if isinstance(v, float) else float(v[0]) for v in (torque, reach, stiffness))
             return (fr.dahl_slip_rates(states[0], body_rate, float(spring_tangent), float(spring_torque),
-                                       torque, reach, stiffness, 0.02 * reach, self.velocity_scale),)
+                                       torque, reach, stiffness, self.stop_rounding * reach, self.velocity_scale),)
         return tuple(fr.dahl_slip_rates(_states(states), body_rate, spring_tangent, spring_torque, torque, reach,
-                                        stiffness, 0.02 * reach, self.velocity_scale))
+                                        stiffness, self.stop_rounding * reach, self.velocity_scale))
 
     def compiled(self, size, c_struct, c_mesh):
         if not self.keeps_law_of(DahlSlip, _LAW + ("_law",)) or self.substeps != 8:
             return None
         from hdsim.model.effects import kernels
         torque, reach, stiffness = (np.ravel(v)[0] for v in self._law(None))
-        return (kernels.dahl_slip_step,), parameter_rows(size, torque, reach, stiffness, 0.02 * reach)
+        return (kernels.dahl_slip_step,), parameter_rows(size, torque, reach, stiffness, self.stop_rounding * reach)
 
     def free_parameters(self, context: FitContext):
         t = context.max_torque
