@@ -16,18 +16,24 @@ a coarsely sampled cycle as noise). For white noise of rms σ that residual has 
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 __all__ = ["NOISE_WINDOW", "RATE_STEP", "local_cubic_weights", "noise_level", "smoothed", "turning_points",
            "torque_legs", "loading_direction", "loading_rates", "leg_loading", "rate_groups", "Breakaway",
-           "angle_resolution", "breakaway_episodes"]
+           "angle_resolution", "breakaway_episodes", "glitches", "GLITCH_FACTOR"]
 
 #: samples of the local cubic fit that the noise estimate subtracts
 NOISE_WINDOW = 7
 #: two loading rates are distinct when they differ by more than this factor
 RATE_STEP = 1.5
+#: a glitch lies this many times the signal's local scale (its excursions and steps between
+#: rows) away from its two neighbours: white noise never gets there
+GLITCH_FACTOR = 20.0
+#: rows on each side of a candidate glitch that set its local scale
+GLITCH_WINDOW = 10
 
 
 def local_cubic_weights(window: int) -> np.ndarray:
@@ -50,6 +56,56 @@ def noise_level(x) -> float:
     residual = x[half:x.size - half] - np.convolve(x, weights[::-1], mode="valid")
     # white noise of rms σ leaves σ²(1 − w₀) in x minus its local fit (w₀ the centre weight)
     return float(np.median(np.abs(residual)) / 0.6745 / math.sqrt(1.0 - weights[half]))
+
+
+def glitches(x) -> np.ndarray:
+    """Rows of ``x`` that are isolated one-row glitches (a failed read, a dropped bit).
+
+    A glitch lies further from the mean of its two neighbours than they are from each
+    other, and more than `GLITCH_FACTOR` times the local scale: the largest of the median
+    excursion and the median step between rows over `GLITCH_WINDOW` rows on each side, and
+    the record's smallest non-zero step (an encoder's count); it must also exceed a quarter
+    of that factor times the whole record's median excursion. A reversal, a sharp corner of
+    a ramp, a backlash jump or a load step is a change the neighbours share; noise, a
+    ripple sampled coarsely or a coarse encoder's one-count dither move the rows around it
+    as much. Two bad rows in a row are not found.
+
+    Parameters
+    ----------
+    x : array_like
+        One column of a record (non-finite values are never glitches, nor their neighbours).
+
+    Returns
+    -------
+    numpy.ndarray
+        Indices of the glitch rows, ascending.
+    """
+    x = np.asarray(x, dtype=float)
+    if x.size < 2 * GLITCH_WINDOW + 3:
+        return np.zeros(0, dtype=int)
+    steps = np.abs(np.diff(x))
+    moving = steps[np.isfinite(steps) & (steps > 0)]
+    count = float(moving.min()) if moving.size else 0.0
+    excursion = np.full(x.size, np.nan)  # of each row from the mean of its neighbours
+    with np.errstate(invalid="ignore"):
+        excursion[1:-1] = np.abs(x[1:-1] - 0.5 * (x[:-2] + x[2:]))
+        # a glitch also stands out of the whole record (a quarter of the factor times its median
+        # excursion): that keeps the local look below to a few rows of a long noisy log
+        typical = GLITCH_FACTOR / 4.0 * float(np.nanmedian(excursion[1:-1]))
+        candidates = np.flatnonzero((excursion[1:-1] > np.abs(x[2:] - x[:-2]))
+                                    & (excursion[1:-1] > max(GLITCH_FACTOR * count, typical))) + 1
+    found = []
+    for chunk in np.array_split(candidates, max(1, candidates.size // 100_000)):  # bounded memory
+        if not chunk.size:
+            continue
+        around = np.clip(chunk[:, None] + np.arange(-GLITCH_WINDOW, GLITCH_WINDOW + 1), 1, x.size - 2)
+        local = excursion[around]
+        local[:, GLITCH_WINDOW] = np.nan  # the row itself does not set its scale
+        with np.errstate(invalid="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # an all-NaN window near failed reads
+            scale = np.fmax(np.fmax(np.nanmedian(local, axis=1), np.nanmedian(steps[around - 1], axis=1)), count)
+            found.append(chunk[excursion[chunk] > GLITCH_FACTOR * scale])
+    return np.concatenate(found) if found else np.zeros(0, dtype=int)
 
 
 def smoothed(x, noise: float) -> tuple[np.ndarray, float]:
@@ -255,6 +311,6 @@ def breakaway_episodes(time, angle, torque, rest_s: float = 0.1) -> list[Breakaw
         low = np.flatnonzero(np.abs(smooth[r0:onset + 1]) < 0.2 * abs(level))
         rise = float(t[onset] - t[r0 + low[-1]]) if low.size else float(t[onset] - t[r0])
         out.append(Breakaway(int(np.sign(travel)), r0, onset, stop, level,
-                             math.sqrt(noise ** 2 / m + span ** 2 / 12.0), float(np.ptp(smooth[r0:onset + 1])),
+                             math.hypot(noise / math.sqrt(m), span / math.sqrt(12.0)), float(np.ptp(smooth[r0:onset + 1])),
                              travel, rise))
     return out

@@ -97,3 +97,46 @@ def test_the_shipped_scenarios_are_far_inside_the_limits():
         steps = sum((b - a) / o.max_step for a, b, o in step_schedule(bench, SolverOptions()))
         assert bench.t_end * bench.sample_rate < limits.MAX_SAMPLES / 10
         assert steps < limits.MAX_SOLVER_STEPS / 10
+
+
+@pytest.mark.parametrize("evaluator", ["dynamic", "quasistatic"])
+def test_a_torque_cycle_too_fast_to_be_static_is_refused_before_it_runs(evaluator, monkeypatch):
+    """A ramp shorter than ten periods of the first mode: the loop would read the vibration (a
+    rate of 1e3 T_N/s gave a negative lost motion); the limit is the first mode's, computed
+    here with the same formula, 2π √(J / K_max)."""
+    import numpy as np
+
+    import hdsim.simulation.solver as solver
+    from hdsim.model.catalog import load_unit
+    from hdsim.scenarios.run import run_scenario
+
+    monkeypatch.setattr(solver, "solve_ivp", lambda *a, **k: (_ for _ in ()).throw(AssertionError("solver called")))
+    unit = load_unit("CSG-25-100")
+    c_struct, c_mesh = unit.split()
+    reach = np.linspace(0.0, 2.0 * 0.04 * unit.drive.rated_torque * (c_struct + c_mesh), 33)
+    period = 2 * np.pi * np.sqrt(unit.drive.J_out / np.max(unit.hardening.tangent(reach[:, None], c_struct, c_mesh)))
+    limit = 0.04 / (10.0 * period)  # a ramp of the ±4 % cycle lasts amplitude / rate
+    with pytest.raises(InputError, match=rf"load.rate <= {limit:.3g}$"):
+        run_scenario(unit, Scenario(_locked(rate=1.01 * limit), "fast.toml"), evaluator=evaluator)
+    if evaluator == "quasistatic":  # just inside the limit it runs
+        run = run_scenario(unit, Scenario(_locked(rate=0.99 * limit), "fast.toml"), evaluator=evaluator)
+        assert run.metric("lost_motion_arcmin") > 0
+
+
+@pytest.mark.parametrize("updates, match", [
+    ({"flexspline.module": 1.0}, "module × teeth / 2 = .* must be the pitch radius"),
+    ({"flexspline.teeth": 3.0}, "module × teeth / 2 = .* must be the pitch radius"),
+    ({"flexspline.teeth": 200.5}, "must be a whole number of teeth"),
+])
+def test_teeth_that_do_not_fit_the_rim_are_refused(updates, match):
+    """The module and tooth count set the pitch radius, m z / 2, which the rim sets too (one
+    dedendum beyond the tooth root): a module changed alone (1 m instead of 0.3 mm moved the
+    mesh compliance a thousandfold) or a tooth count that fits no rim is refused."""
+    from hdsim.model.catalog import load_unit
+
+    unit = load_unit("CSG-25-100")
+    g = unit.geometry
+    assert 0.5 * g.module * g.teeth == pytest.approx(float(g.pitch_radius), rel=1e-12)  # the catalog's own
+    with pytest.raises(InputError, match=match):
+        unit.with_updates(updates)
+    unit.with_updates({"flexspline.h_pz": 1.1 * g.h_pz})  # a design study's ±10 % stays inside

@@ -15,6 +15,7 @@ import json
 import os
 import re
 import sys
+import warnings
 
 from hdsim.errors import InputError, SolverError
 
@@ -24,7 +25,7 @@ VERBS = ("demo", "units", "simulate", "compliance", "sobol", "fit", "diagnose")
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     """The parser of every verb, or of verb ``only`` alone: a verb's module imports what
     the verb needs (the dynamic solvers, the FE), and a command should not pay for the others'."""
-    parser = argparse.ArgumentParser(
+    parser = OneLineErrorParser(
         prog="hdsim",
         description="Harmonic drive simulator: stiffness, lost motion, kinematic error, "
         "Sobol sensitivity and model-vs-measurement diagnosis.",
@@ -35,7 +36,8 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true",
                         help="show the Python traceback of an error (anywhere on the command line; "
                              "or set HDSIM_DEBUG=1)")
-    subparsers = parser.add_subparsers(dest="verb", metavar="VERB")
+    # each verb's parser is a OneLineErrorParser too (argparse's default parser_class is the parent's type)
+    subparsers = parser.add_subparsers(dest="verb", metavar="VERB", parser_class=OneLineErrorParser)
     for verb in VERBS if only is None else (only,):
         try:
             module = importlib.import_module(f"hdsim.cli.{verb}")
@@ -47,10 +49,35 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+class OneLineErrorParser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line, like every other refusal of hdsim.
+
+    argparse's own is the usage block and then ``hdsim: error: …``, even after a verb; here it
+    is ``hdsim VERB: error: MESSAGE (hdsim VERB --help lists the options)``, exit status 2.
+    """
+
+    def error(self, message):
+        argument_error(self.prog, message)
+
+
+def argument_error(prog: str, message: str):
+    """Print an argument error of ``prog`` (``hdsim`` or ``hdsim VERB``) as one line; exit 2."""
+    message = " ".join(str(message).split())
+    expected = re.match(r"argument (-[-\w]+)(?:/\S+)?: expected one argument", message)
+    if expected:  # '--range -10%': argparse takes a value that begins with '-' for an option
+        message += f"; a value that begins with '-' is written {expected.group(1)}=VALUE"
+    sys.stderr.write(f"{prog}: error: {message} ({prog} --help lists the options)\n")
+    raise SystemExit(2)
+
+
 def emit_json(obj) -> None:
-    """Print exactly one JSON object on stdout (the contract of every ``--json``)."""
-    json.dump(obj, sys.stdout, allow_nan=False, default=_json_default)
-    sys.stdout.write("\n")
+    """Print exactly one JSON object on stdout (the contract of every ``--json``).
+
+    The whole text is made before any of it is printed: a value JSON cannot hold (NaN,
+    infinity) then fails with nothing on stdout, never half an object.
+    """
+    text = json.dumps(obj, allow_nan=False, default=_json_default)
+    sys.stdout.write(text + "\n")
     sys.stdout.flush()
 
 
@@ -70,11 +97,23 @@ def main(argv=None) -> int:
     argv = [a for a in argv if a != "--debug"]
     first = next((a for a in argv if not a.startswith("-")), None)
     parser = build_parser(first if first in VERBS else None)
-    args = parser.parse_args(argv)
+    args, extras = parser.parse_known_args(argv)
+    if extras:  # found by the top parser after the verb's: said as the verb's error
+        argument_error(f"hdsim {args.verb}" if args.verb else "hdsim",
+                       f"unrecognized arguments: {' '.join(extras)}")
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)
         return 2
     debug = debug or os.environ.get("HDSIM_DEBUG", "") not in ("", "0")
+    with warnings.catch_warnings():
+        if not debug:
+            hide_library_warnings()
+        return _dispatch(args, debug)
+
+
+def _dispatch(args, debug: bool) -> int:
+    """Run the verb; bad input and the machine's refusals as one line (exit 2), the
+    program's own failures as an internal error (exit 1)."""
     try:
         return int(args.func(args) or 0)
     except (InputError, SolverError) as exc:
@@ -100,6 +139,43 @@ def main(argv=None) -> int:
         if debug:
             raise
         return _internal_error(args.verb, exc)
+
+
+#: packages whose Python warnings are advice to programmers, not to the user of the command
+_LIBRARIES = frozenset({"numpy", "scipy", "SALib", "h5py", "matplotlib", "numba", "pandas", "dask",
+                        "distributed", "skfem", "tomli_w"})
+
+
+def hide_library_warnings() -> None:
+    """Keep the numerical libraries' Python warnings off the user's stderr (``--debug`` shows them).
+
+    A record with one absurd cell made numpy print a dozen lines of overflow warnings before
+    the one-line refusal. hdsim says what the user must know itself, on lines of its own
+    (``hdsim fit: warn: …``, printed, not warned), so nothing of hdsim's is hidden here.
+    Call inside ``warnings.catch_warnings()``: the filter and the hook are undone on leaving it.
+    """
+    # numpy's floating-point warnings (overflow, divide by zero, invalid value) come from its C
+    # loops and are attributed to the line that called them, often hdsim's own: only their
+    # category names them. hdsim raises no RuntimeWarning of its own (nor its RankWarning subclass).
+    warnings.filterwarnings("ignore", category=RuntimeWarning)
+    # a library's other warnings (scipy's 'rtol is too small') may be attributed, by their
+    # stacklevel, to the hdsim line that called it; the frame that issued them is the library's
+    shown = warnings.showwarning
+
+    def show_unless_library(message, category, filename, lineno, file=None, line=None):
+        if not _issued_by_library():
+            shown(message, category, filename, lineno, file, line)
+
+    warnings.showwarning = show_unless_library
+
+
+def _issued_by_library() -> bool:
+    """Whether the warning being shown was issued (``warnings.warn`` called) by a library's code."""
+    frame = sys._getframe(2)  # beyond _issued_by_library and show_unless_library
+    while frame is not None and frame.f_globals.get("__name__") in ("warnings", __name__):
+        frame = frame.f_back
+    issuer = frame.f_globals.get("__name__", "") if frame is not None else ""
+    return issuer.split(".")[0] in _LIBRARIES
 
 
 def _internal_error(verb: str, exc: BaseException) -> int:

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from hdsim.cli._guards import require_finite
 from hdsim.errors import InputError, unknown_name
 from hdsim.model.drive import HarmonicDrive
 from hdsim.model.effects import FAMILIES, NO_EFFECT
@@ -88,9 +89,22 @@ def apply_sets(model: HarmonicDrive, scenario: Scenario | None, sets: dict[str, 
     return model, scenario
 
 
+#: what to change when a run gives a non-finite metric (`hdsim.cli._guards.require_finite`)
+NONFINITE_HINT = ("the values of the unit or the scenario are outside what the model can compute "
+                  "(look at each --set and the scenario's load rate and amplitude)")
+
+
 def metrics_as_floats(metrics: dict) -> dict[str, float]:
     """The first sample of each metric, as a float."""
     return {name: float(np.asarray(value).reshape(-1)[0]) for name, value in metrics.items()}
+
+
+def finite_metrics(run) -> dict[str, float]:
+    """The run's metrics as floats (`metrics_as_floats`); SolverError, one line naming each
+    metric that is not finite, for a run that overflowed: it is no result to write or print."""
+    metrics = metrics_as_floats(run.metrics)
+    require_finite(metrics, f"the run of {run.scenario.name} on {run.model.name}", NONFINITE_HINT)
+    return metrics
 
 
 def print_metrics(title: str, metrics: dict[str, float], stream=None) -> None:
@@ -118,6 +132,15 @@ def _figures(setup: str) -> dict:
     return figures[setup]
 
 
+def output_names(scenario: Scenario, figures: bool = True) -> list[str]:
+    """The names of the files `write_outputs` may write for a run of ``scenario`` (checked
+    before the run: none of them may be a folder)."""
+    names = [f"{scenario.name}.h5"]
+    if figures:
+        names += [f"{scenario.name}_{kind}.png" for kind in _figures(scenario.setup)]
+    return names
+
+
 def write_outputs(run, out_dir: Path, figures: bool = True) -> dict[str, str]:
     """Run file and figures for a finished run.
 
@@ -130,12 +153,18 @@ def write_outputs(run, out_dir: Path, figures: bool = True) -> dict[str, str]:
     figures : bool
         Draw the bench's figures.
 
+    Raises
+    ------
+    hdsim.errors.SolverError
+        A metric of the run is not finite; nothing is written.
+
     Returns
     -------
     dict
         ``result`` and ``KIND_figure`` → the path written (a kind with nothing to draw for
         this run is left out).
     """
+    finite_metrics(run)  # a run that overflowed leaves no file behind, whoever writes it
     out_dir = Path(out_dir)
     paths = {"result": str(run.save(out_dir / f"{run.scenario.name}.h5"))}
     if figures:

@@ -11,7 +11,7 @@ reading a log from other bench software (nothing needs editing):
   --columns time_s=t,torque_Nm=5.11*iq_A,angle_rev=pos
                                  map and scale columns: FACTOR*column (e.g. torque from
                                  motor current), angle units _rad _deg _arcmin _arcsec _rev
-  --drop-nan                     drop rows with a NaN or empty cell (the count is reported)
+  --drop-nan                     drop rows with a NaN or empty cell, or a one-row glitch (counted)
   --window 2.5:40                keep 2.5 s <= time_s <= 40 s
   --concatenated                 several runs whose clock restarts: joined end to end
   --sample-rate 1                a log without a time column (a step test point by point):
@@ -37,7 +37,8 @@ def add_import_arguments(parser) -> None:
     group.add_argument("--meta", action="append", default=[], metavar="KEY=VALUE",
                        help="set any other '#' key, e.g. torque_side=output (repeatable)")
     group.add_argument("--drop-nan", action="store_true",
-                       help="drop rows with a non-finite or empty cell in a used column (counted)")
+                       help="drop rows with a non-finite or empty cell in a used column, or a one-row "
+                            "glitch (counted)")
     group.add_argument("--window", default=None, metavar="T0:T1", help="keep rows with T0 <= time_s <= T1 [s]")
     group.add_argument("--concatenated", action="store_true",
                        help="the log holds several runs whose clock restarts: join them end to end")

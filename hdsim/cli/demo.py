@@ -5,8 +5,8 @@ from __future__ import annotations
 import sys
 import time
 
-from hdsim.atomic import check_writable_folder
 from hdsim.cli import _common, emit_json
+from hdsim.cli._guards import check_output_folder
 from hdsim.model.catalog import load_unit
 from hdsim.model.datasheet import catalog_entry, default_unit
 from hdsim.scenarios.run import run_scenario
@@ -32,13 +32,16 @@ def main(args) -> int:
     model = load_unit(args.unit)
     catalog = dict(model.provenance.get("catalog") or catalog_entry(model.name))
     scenarios = [load_scenario(name) for name in ("lost_motion", "stiffness")]
-    out = check_writable_folder(args.out)  # before the runs, not after them
-    summary, files = {}, {}
+    names = [name for scenario in scenarios for name in _common.output_names(scenario)]
+    out = check_output_folder(args.out, "--out", names=names)  # before the runs, not after them
+    runs, summary, files = [], {}, {}
     for scenario in scenarios:
         print(f"running {scenario.name} on {model.name} ...", file=sys.stderr)
         run = run_scenario(model, scenario)
-        files[scenario.name] = _common.write_outputs(run, out)
-        summary.update(_common.metrics_as_floats(run.metrics))
+        runs.append(run)
+        summary.update(_common.finite_metrics(run))
+    for run in runs:  # both runs checked first: a failed second run leaves no files of the first
+        files[run.scenario.name] = _common.write_outputs(run, out)
     elastic = rad_to_arcmin(0.08 * catalog["rated_torque"] / catalog["K1"])
     seconds = time.perf_counter() - start
     if args.json:

@@ -47,9 +47,9 @@ def run(args) -> int:
         raise InputError("--max-rounds must be 0 or more")
     meas, effects = load_inputs(args)
     if args.report:
-        from hdsim.atomic import check_writable_folder
+        from hdsim.cli._guards import check_output_folder
 
-        check_writable_folder(args.report)  # before the work, not after it
+        check_output_folder(args.report, "--report", data=args.data)  # before the work, not after it
 
     def log(message):
         print(f"hdsim diagnose: {message}", file=sys.stderr, flush=True)

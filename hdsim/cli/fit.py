@@ -88,31 +88,35 @@ def _emitted(args, summary: dict, checks: list, data: dict) -> bool:
     return bool(args.json)
 
 
+#: what to look at when a fit gives a non-finite value (`hdsim.cli._guards.require_finite`)
+NONFINITE_FIT_HINT = ("a cell of the record is probably far out of range (a mistyped or overflowed value): "
+                      "correct it, or cut it out with --window")
+
+
 def run(args) -> int:
-    from hdsim.atomic import check_writable_folder
-    from hdsim.errors import InputError
+    from hdsim.cli._guards import check_output_file, check_output_folder, require_finite
     from hdsim.identification.test_kinds import test_kind
-    from hdsim.identification.workflow import prepare_record
+    from hdsim.identification.workflow import drive_scale, fit
 
     meas, effects = load_inputs(args)
-    meas, checks, data, wrong, scale = prepare_record(meas, args.unit)
-    if wrong:
-        raise InputError(f"{meas.source}: this is not a {meas.test} test: {wrong}")
     kind = test_kind(meas.test)
     out = Path(args.out) if args.out else Path(Path(args.data).name).with_suffix(".fit.toml")
-    check_writable_folder(out.parent)  # before the fit, not after it
+    # where the results go is checked before the fit, not after it
+    check_output_file(out, "--out", args.data)  # the default path too: --out is how to change it
     if args.report:
-        check_writable_folder(args.report)
-    result = kind.fit(meas, effects, unit=args.unit)  # the record prepare_record prepared
+        check_output_folder(args.report, "--report", data=args.data)
+    result = fit(meas, effects, unit=args.unit)  # checked, thinned, refused if not its test
+    require_finite(result.summary(), f"the fit of {meas.source}", NONFINITE_FIT_HINT)
     result.save(out)
+    scale = drive_scale(args.unit)
     summary = kind.fit_summary(result, out.with_suffix(""), scale)
     summary["parameters_file"] = str(out)
-    checks = checks + kind.plausibility(result, scale)
     if args.report:
         from hdsim.identification.report_page import fit_page
 
-        summary["report"] = str(fit_page(result, args.report, {**summary, "checks": checks}, kind, scale))
-    if _emitted(args, summary, checks, data):
+        page = fit_page(result, args.report, {**summary, "checks": result.checks}, kind, scale)
+        summary["report"] = str(page)
+    if _emitted(args, summary, list(result.checks), dict(result.data)):
         return 0
     _PRINTERS[kind.error_key](meas, result, summary)
     sys.stdout.flush()
@@ -120,7 +124,7 @@ def run(args) -> int:
 
 
 def _print_twist(meas, result, summary) -> None:
-    print(f"{meas.source}: {meas.test} test, {len(meas)} rows, effects "
+    print(f"{meas.source}: {meas.test} test, {result.data['rows']} rows, effects "
           f"{', '.join(result.families) or '(base model)'}")
     print(f"  rms error {summary['rmse_rad']:.3g} rad, max {summary['max_abs_error_rad']:.3g} rad, "
           f"BIC {summary['bic']:.1f} ({summary['n_params']} parameters)")
@@ -135,7 +139,7 @@ def _print_twist(meas, result, summary) -> None:
 
 def _print_torque(meas, result, summary) -> None:
     side = meas.torque_side
-    print(f"{meas.source}: {meas.test} test, {len(meas)} rows, torque on the {side} shaft, effects "
+    print(f"{meas.source}: {meas.test} test, {result.data['rows']} rows, torque on the {side} shaft, effects "
           f"{', '.join(result.families) or '(base model)'}")
     print(f"  rms error {summary['rmse_Nm']:.3g} N·m (noise floor {summary['noise_floor_Nm']:.3g} N·m)")
     for name, value in summary["metrics"].items():

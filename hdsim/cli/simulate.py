@@ -5,8 +5,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from hdsim.atomic import check_writable_folder
 from hdsim.cli import _common, emit_json
+from hdsim.cli._guards import check_output_folder
 from hdsim.model.catalog import load_unit
 from hdsim.scenarios.evaluator import EVALUATORS
 from hdsim.scenarios.run import run_scenario
@@ -40,8 +40,10 @@ def main(args) -> int:
     # everything that can be wrong with the input is checked before anything is written
     scenario = load_scenario(args.scenario)
     model, scenario = _common.apply_sets(load_unit(args.unit), scenario, _common.parse_sets(args.sets))
-    check_writable_folder(args.out)  # an unwritable folder is said before the run, not after it
+    # an unwritable folder (or a folder where a result file goes) is said before the run, not after it
+    check_output_folder(args.out, "--out", names=_common.output_names(scenario, figures=not args.no_figures))
     run = run_scenario(model, scenario, evaluator=args.evaluator)
+    # a run that overflowed is refused here, before any file is written, not reported as a result
     paths = _common.write_outputs(run, Path(args.out), figures=not args.no_figures)
     metrics = _common.metrics_as_floats(run.metrics)
     if args.json:

@@ -17,7 +17,7 @@ import json
 import time
 from pathlib import Path
 
-from hdsim.atomic import check_writable_folder
+from hdsim.cli._guards import check_output_file, check_output_folder
 from hdsim.errors import InputError
 from hdsim.scenarios.evaluator import EVALUATORS
 
@@ -73,14 +73,17 @@ def run(args) -> int:
     from hdsim.sensitivity.study import run_study
 
     t0 = time.perf_counter()
-    n, seed = _int(args.n, "--n"), _int(args.seed, "--seed")
+    n, seed = _int(args.n, "--n"), _int(args.seed, "--seed", minimum=0)
     reps, workers = _int(args.replicates, "--replicates"), _int(args.workers, "--workers")
-    chunksize = _int(args.chunksize, "--chunksize") if args.chunksize else None
+    chunksize = _int(args.chunksize, "--chunksize", minimum=1) if args.chunksize else None
     target = _float(args.target_width, "--target-width") if args.target_width else None
     if args.resume and not args.out:
         raise InputError("--resume needs --out STUDY.h5")
+    # where the results go is checked before the study, not after its first chunk
     if args.out:
-        check_writable_folder(Path(args.out).parent)  # before the study, not after its first chunk
+        check_output_file(args.out, "--out")
+    if args.report:
+        check_output_folder(args.report, "--report", names=_REPORT_FILES)
     # a broken model is ModelError (bad input, exit 2); anything else that fails here, a
     # broken process pool included, is the program's failure and reaches main (exit 1)
     func, problem, output, model, analytic = _resolve(args, models)
@@ -181,6 +184,10 @@ def _extras(args, model, analytic, names, result) -> dict:
     return extra
 
 
+#: what ``--report DIR`` holds (`_write_outputs`): checked before the study
+_REPORT_FILES = ("sobol.json", "sobol_indices.png", "sobol_convergence.png")
+
+
 def _write_outputs(args, summary, result, analytic, target) -> None:
     """Figures and the JSON summary: into ``--report DIR`` or next to ``--out``."""
     if args.report:
@@ -215,11 +222,14 @@ def _print_table(s) -> None:
         print(f"evaluator: {choice['chosen']} ({choice['reason']})")
 
 
-def _int(text, option) -> int:
+def _int(text, option, minimum=None) -> int:
     try:
-        return int(str(text).strip())
+        value = int(str(text).strip())
     except ValueError:
         raise InputError(f"{option} expects an integer, got '{text}'") from None
+    if minimum is not None and value < minimum:
+        raise InputError(f"{option} must be {minimum} or more, got {value}")
+    return value
 
 
 def _float(text, option) -> float:

@@ -12,20 +12,24 @@ def register(subparsers) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.add_argument("--template", action="store_true",
                    help="print a commented drive-file template (TOML) on stdout; save it, edit it "
-                        "and give its path wherever a unit is accepted (--unit my_drive.toml)")
+                        "and give its path wherever a unit is accepted (--unit my_drive.toml); with --json, "
+                        "one JSON object whose 'template' holds that text")
     p.set_defaults(func=main)
 
 
 def main(args) -> int:
+    from hdsim.cli import emit_json
+
     if args.template:
         from hdsim.model.drive_file import template
 
-        print(template(), end="")
+        if args.json:  # --json always prints one JSON object: the template's text is its value
+            emit_json({"format": "toml", "template": template()})
+        else:
+            print(template(), end="")
         return 0
     entries = {name: catalog_entry(name) for name in unit_names()}
     if args.json:
-        from hdsim.cli import emit_json
-
         emit_json({"default": default_unit(), "units": entries})
         return 0
     header = f"{'unit':<12} {'T_N':>6} {'T1':>6} {'T2':>6} {'K1':>9} {'K2':>9} {'K3':>9}  status"

@@ -21,6 +21,8 @@ than ``n`` independent samples.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
+from types import MappingProxyType
 
 import numpy as np
 
@@ -227,6 +229,11 @@ class FittedRows:
 
     residual: np.ndarray
     rows: np.ndarray
+    #: what `hdsim.fit` found of the record and of the fit against the datasheet (the data
+    #: checks and plausibility warnings, as JSON objects) and the data summary; empty for a
+    #: fit made below the workflow
+    checks: Sequence = ()
+    data: Mapping = MappingProxyType({})
 
     @property
     def rss(self) -> float:

@@ -18,6 +18,7 @@ The tutorial ``docs/tutorial-find-missing-effect.md`` walks through it.
 from __future__ import annotations
 
 import copy
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -26,11 +27,12 @@ from hdsim.identification.outcome import assess
 from hdsim.identification.test_kinds import TestKind, test_kind
 from hdsim.io.data_checks import DriveScale, import_checks, wrong_test
 from hdsim.io.decimation import thin_record
-from hdsim.io.measurement import Measurement
+from hdsim.errors import InputError
+from hdsim.io.measurement import Measurement, load_measurement
 from hdsim.model.catalog import load_unit
 
 __all__ = ["diagnose", "fit", "BenchDiagnosis", "WrongTest", "examine", "examine_record", "prepare_record",
-           "test_kind"]
+           "drive_scale", "test_kind"]
 
 
 def examine(meas: Measurement, scale: DriveScale) -> tuple[list, dict, str]:
@@ -67,11 +69,16 @@ def examine_record(meas: Measurement, unit=None) -> tuple[list[dict], dict, str,
     return prepare_record(meas, unit)[1:]
 
 
+def drive_scale(unit=None) -> DriveScale:
+    """The datasheet numbers of ``unit`` (a name, a drive file, a `HarmonicDrive`, or the
+    default unit) that the checks and the plausibility compare a record with."""
+    return DriveScale.of(unit if unit is not None and not isinstance(unit, str) else load_unit(unit))
+
+
 def prepare_record(meas: Measurement, unit=None) -> tuple:
     """(the record in its kind's conventions, then what `examine_record` gives): the one
     place a record is prepared and checked before a fit or a diagnosis."""
-    drive = unit if unit is not None and not isinstance(unit, str) else load_unit(unit)
-    scale = DriveScale.of(drive)
+    scale = drive_scale(unit)
     meas, checks, data, wrong = _examine(meas, scale)
     return meas, [c.to_json() for c in checks], data, wrong, scale
 
@@ -184,6 +191,7 @@ def diagnose(measurement: Measurement, effects=None, *, unit=None, families=None
         ``.to_json()`` and ``.report(directory)``; a `WrongTest` (outcome
         ``wrong_test``) when the record is not the test it claims.
     """
+    measurement = _record(measurement)
     kind = test_kind(measurement.test)
     prepared, checks, data, wrong, scale = prepare_record(measurement, unit)
     if wrong:
@@ -198,12 +206,40 @@ def diagnose(measurement: Measurement, effects=None, *, unit=None, families=None
 
 
 def fit(measurement: Measurement, effects=None, *, unit=None):
-    """Fit the model with ``effects`` to a record of any test kind.
+    """Check a record and fit the model with ``effects`` to it, for any test kind.
+
+    The record goes through the checks `diagnose` runs (a long log is thinned, a record
+    that is not the test it claims is refused) before it is fitted.
 
     Returns the kind's fit result (`hdsim.identification.fit.FitResult` for the twist
     tests, `hdsim.identification.running_fit.RunningFit` for a running-torque sweep); its
     ``.drive`` is the `HarmonicDrive` carrying everything fitted, which `run_scenario`
-    and `sobol` take as it is.
+    and `sobol` take as it is; ``.checks`` are the data checks and the plausibility of the
+    fitted values against the datasheet (JSON objects, as ``hdsim fit --json`` prints them)
+    and ``.data`` the data summary.
+
+    Raises
+    ------
+    InputError
+        A record that is not the test it claims (the sentence of the failed check), or
+        not a record at all.
     """
+    measurement = _record(measurement)
     kind = test_kind(measurement.test)
-    return kind.fit(kind.prepare(measurement)[0], effects, unit=unit)
+    prepared, checks, data, wrong, scale = prepare_record(measurement, unit)
+    if wrong:
+        raise InputError(f"{measurement.source}: this is not a {measurement.test} test: {wrong}")
+    result = kind.fit(prepared, effects, unit=unit)
+    result.checks = checks + kind.plausibility(result, scale)
+    result.data = data
+    return result
+
+
+def _record(measurement) -> Measurement:
+    """A record: a `Measurement` as it is, a path read with `load_measurement`'s defaults."""
+    if isinstance(measurement, Measurement):
+        return measurement
+    if isinstance(measurement, (str, os.PathLike)):
+        return load_measurement(measurement)
+    raise InputError(f"expected a measurement (hdsim.load_measurement(path)) or a file path, "
+                     f"got {type(measurement).__name__}")

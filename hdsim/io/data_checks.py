@@ -368,7 +368,7 @@ def import_checks(meas) -> list[Check]:
     if rows.dropped_rows:
         share = rows.dropped_rows / max(total, 1)
         out.append(Check("dropped_rows", "warn" if share > 0.05 else "ok",
-                         f"{rows.dropped_rows} of {total} rows dropped for a NaN or empty cell "
+                         f"{rows.dropped_rows} of {total} rows dropped for a NaN, empty or glitch cell "
                          f"({100 * share:.2g} %)"))
     if rows.windowed_rows:
         out.append(Check("window", "ok", f"{rows.windowed_rows} rows outside the time window left out"))

@@ -13,7 +13,8 @@ The order of the row operations is fixed and documented, so a user can predict i
 1. time: from the row index at ``sample_rate`` [Hz] when the file has no time column;
 2. concatenated runs: each run whose clock restarts continues after the previous one;
 3. window: keep rows with ``T0 <= time_s <= T1`` (on the joined clock);
-4. drop NaN: drop rows with a non-finite cell in a column the test uses (counted).
+4. drop NaN: drop rows with a non-finite cell in a column the test uses, or a one-row
+   glitch (`glitch_rows`), counted.
 """
 
 from __future__ import annotations
@@ -25,8 +26,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hdsim.errors import InputError
+from hdsim.signals import glitches
 
-__all__ = ["ImportOptions", "RowReport", "parse_window", "parse_meta", "split_factor", "apply_rows"]
+__all__ = ["ImportOptions", "RowReport", "parse_window", "parse_meta", "split_factor", "apply_rows", "glitch_rows"]
 
 #: ``FACTOR*column`` in a column map: a number, a ``*``, then the file's column name
 _FACTOR = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*\*\s*(\S.*?)\s*$")
@@ -47,8 +49,8 @@ class ImportOptions:
     meta : dict of str to str
         Any other ``#`` key, e.g. ``{"torque_side": "output"}``; wins over the file's.
     drop_nan : bool
-        Drop rows with a non-finite (or empty) cell in a used column instead of refusing
-        the file; the count is reported.
+        Drop rows with a non-finite (or empty) cell in a used column, or a one-row glitch
+        (`glitch_rows`), instead of refusing the file; the count is reported.
     window : tuple of float or None
         ``(T0, T1)`` [s]: keep rows with ``T0 <= time_s <= T1``.
     sample_rate : float or None
@@ -105,7 +107,7 @@ class RowReport:
     Attributes
     ----------
     dropped_rows : int
-        Rows dropped for a non-finite cell.
+        Rows dropped for a non-finite cell or a glitch.
     windowed_rows : int
         Rows outside the window.
     runs : int
@@ -212,11 +214,21 @@ def apply_rows(data: dict, options: ImportOptions, where) -> tuple[dict, RowRepo
     dropped = 0
     if options.drop_nan:
         finite = np.logical_and.reduce([np.isfinite(v) for v in data.values()])
+        for rows in glitch_rows(data).values():
+            finite[rows] = False
         dropped = int(np.count_nonzero(keep & ~finite))
         keep &= finite
     if not keep.all():
         data = {k: v[keep] for k, v in data.items()}
     return data, RowReport(dropped, windowed, runs, time_from_rows), np.flatnonzero(keep)
+
+
+def glitch_rows(data: dict) -> dict[str, np.ndarray]:
+    """The rows of each column that are isolated one-row glitches (`hdsim.signals.glitches`):
+    a failed read that wrote a number, which would otherwise pass for the drive's answer.
+    The time column is left to the clock's own check."""
+    found = {name: glitches(values) for name, values in data.items() if name != "time_s"}
+    return {name: rows for name, rows in found.items() if rows.size}
 
 
 def _joined_clock(time: np.ndarray) -> tuple[np.ndarray, int]:

@@ -17,7 +17,7 @@ import math
 import numpy as np
 
 from hdsim.errors import InputError
-from hdsim.io.import_options import split_factor
+from hdsim.io.import_options import glitch_rows, split_factor
 from hdsim.units import ANGLE_UNITS
 
 __all__ = [
@@ -485,8 +485,8 @@ def check_values(data: dict[str, np.ndarray], where: Where, names: dict[str, str
     Raises
     ------
     InputError
-        On a NaN or infinite value, fewer than `MIN_ROWS` rows, or a time that does not
-        increase strictly.
+        On a NaN or infinite value, a one-row glitch (`glitch_rows`), fewer than
+        `MIN_ROWS` rows, or a time that does not increase strictly.
     """
     n = data["time_s"].size
     for si, values in data.items():
@@ -498,6 +498,11 @@ def check_values(data: dict[str, np.ndarray], where: Where, names: dict[str, str
                              "reads are dropped with --drop-nan)")
     if n < MIN_ROWS:
         raise where.fail(f"{n} data rows; expected at least {MIN_ROWS}")
+    for si, rows in glitch_rows(data).items():
+        i, values = int(rows[0]), data[si]
+        raise where.fail(f"{where.row(i)}, {names[si]}: {float(values[i])!r} jumps away from both neighbours "
+                         f"({float(values[i - 1]):.6g}, {float(values[i + 1]):.6g}) and back: a glitch, a failed "
+                         f"read? ({rows.size} such rows; --drop-nan drops them with the NaN rows)")
     t = data["time_s"]
     bad = np.flatnonzero(~(np.diff(t) > 0))
     if bad.size:

@@ -26,6 +26,10 @@ from hdsim.errors import InputError
 #: dedendum of the flexspline teeth in modules: the usual full-depth proportion
 #: (addendum 1 m, dedendum 1.25 m), which leaves a root clearance of 0.25 m
 DEDENDUM_MODULES = 1.25
+#: the teeth must fit the rim: module × teeth / 2 within this share of the pitch radius
+#: (a design study moves h_pz by ±10 %, the pitch radius by ±0.3 %; a module typed in
+#: metres instead of millimetres is a thousandfold off)
+PITCH_TOLERANCE = 0.05
 
 
 def _dim(doc: str, unit: str = "m", symbol: str = "", design: bool = False):
@@ -159,7 +163,8 @@ def validate_geometry(g: FlexsplineGeometry) -> None:
     InputError
         Naming the first offending sample of a batch, for: a field that is not a positive
         finite number, an undercut deeper than the rim wall, ν ≥ 0.5, a pressure angle
-        of 45° or more, walls thicker than 10 % of the bore radius, an end radius that
+        of 45° or more, a tooth count that is not whole, teeth that do not fit the pitch
+        radius (`PITCH_TOLERANCE`), walls thicker than 10 % of the bore radius, an end radius that
         does not fit between hub and cylinder, or no plain cylinder left in the cup.
     """
     values = {}
@@ -196,6 +201,12 @@ def validate_geometry(g: FlexsplineGeometry) -> None:
         (g.R_k >= g.R_c - g.r_hub,
          lambda i: f"end radius R_k = {fmt(g.R_k, i)} does not fit between hub and cylinder "
                    f"({fmt(g.R_c - g.r_hub, i)} available)"),
+        (np.abs(g.teeth - np.round(g.teeth)) > 1e-9 * g.teeth,
+         lambda i: f"flexspline.teeth = {_at(g.teeth, i):g} must be a whole number of teeth"),
+        (np.abs(0.5 * g.module * g.teeth - g.pitch_radius) > PITCH_TOLERANCE * g.pitch_radius,
+         lambda i: f"module × teeth / 2 = {fmt(0.5 * g.module * g.teeth, i)} must be the pitch radius "
+                   f"R_i + h_pz + {DEDENDUM_MODULES:g} module = {fmt(g.pitch_radius, i)} (within "
+                   f"{100 * PITCH_TOLERANCE:g} %): change module, teeth and R_i together"),
         (g.cylinder_length <= 0.0,
          lambda i: f"R_k + R_v + undercut + face width exceed the cup length {fmt(g.cup_length, i)}: "
                    f"no cylinder left (R_v = {fmt(g.R_v, i)}, R_k = {fmt(g.R_k, i)})"),

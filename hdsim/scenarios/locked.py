@@ -123,6 +123,27 @@ def ramp_step_bound(scenario, options: SolverOptions | None) -> SolverOptions:
     return options.replace(max_step=float(np.min(np.diff(scenario.times()))) / STEPS_PER_RAMP)
 
 
+#: a torque ramp shorter than this many periods of the output's first mode is no static
+#: test: the inertial torque of a cosine ramp of duration D is ``(T_n / 2D)² / 2`` of the
+#: elastic one, 1.3e-3 at D = 10 T_n, and the loop's metrics (K1, lost motion) would read
+#: the drive's vibration (a rate of 1e3 T_N/s gave a negative lost motion)
+MIN_PERIODS_PER_RAMP_RUN = 10.0
+
+
+def refuse_if_not_static(model: HarmonicDrive, scenario) -> None:
+    """Refuse a torque cycle loaded so fast that the test is no longer static (`InputError`,
+    with the ramp, the mode's period and the fastest rate that stays static)."""
+    load = scenario.data["load"]
+    period = first_period(model, load["amplitude"])
+    ramp = float(np.min(np.diff(scenario.times())))
+    if ramp < MIN_PERIODS_PER_RAMP_RUN * period:
+        fastest = load["rate"] * ramp / (MIN_PERIODS_PER_RAMP_RUN * period)
+        raise InputError(f"{scenario.source}: load.rate = {load['rate']:g} T_N/s makes a torque ramp of "
+                         f"{ramp:.3g} s, {ramp / period:.2g} periods of the drive's first mode ({period:.3g} s): "
+                         f"the test would read the drive's vibration, not its stiffness; a static test needs "
+                         f"load.rate <= {fastest:.3g}")
+
+
 def run_locked(model: HarmonicDrive, scenario, *, samples_per_segment: int | None = None,
                options: SolverOptions | None = None):
     """Run a locked-WG scenario (the runner of `LOCKED`).
@@ -147,6 +168,7 @@ def run_locked(model: HarmonicDrive, scenario, *, samples_per_segment: int | Non
     n = samples_per_segment or scenario.samples_per_segment
     options = ramp_step_bound(scenario, options)
     _refuse_if_too_large(scenario.source, scenario.data["load"], n, model.batch_size, options.max_step)
+    refuse_if_not_static(model, scenario)
     rated = model.drive.rated_torque
     system = locked_wave_generator(model, scenario.torque_profile(rated))
     t_eval = scenario.sample_times(n)
@@ -219,6 +241,7 @@ def run_locked_quasistatic(model: HarmonicDrive, scenario, *, samples_per_segmen
     """
     n = samples_per_segment or scenario.samples_per_segment
     _refuse_if_too_large(scenario.source, scenario.data["load"], n, model.batch_size)
+    refuse_if_not_static(model, scenario)
     every = int(np.ceil(QUASISTATIC_STEPS_PER_RAMP / n))
     steps = scenario.sample_times(n * every)
     shape = scenario.torque_profile(1.0)(steps)

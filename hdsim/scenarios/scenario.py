@@ -60,6 +60,7 @@ class Scenario:
         object.__setattr__(self, "data", copy.deepcopy(self.data))
         if not isinstance(self.data.get("name"), str):
             raise InputError(f"{self.source}: missing 'name'")
+        _check_name(self.data["name"], self.source)
         if not isinstance(self.setup, str):  # checked before the look-up, which needs a name
             raise InputError(f"{self.source}: setup must be str, got {self.setup!r}")
         setup = get_setup(self.setup, f"setup in {self.source}")
@@ -133,6 +134,21 @@ class Scenario:
                 raise unknown_name("scenario key", key, _flat_keys(full))
             table[leaf] = _coerce(value, schema[leaf], key, self.source)
         return Scenario(data, self.source)
+
+
+#: characters a scenario name cannot hold: it is the stem of the result files, written in
+#: the output folder, so a path separator would put them elsewhere (and NUL no system takes)
+_NAME_FORBIDDEN = ("/", "\\", "\0")
+
+
+def _check_name(name: str, source: str) -> None:
+    """InputError unless ``name`` can be the stem of a file inside the output folder: not
+    empty, no path separator, not starting with '.' (a hidden file, or '..' a way out)."""
+    if not name.strip():
+        raise InputError(f"{source}: name is empty; give the scenario a name (the stem of its result files)")
+    if any(c in name for c in _NAME_FORBIDDEN) or name.startswith("."):
+        raise InputError(f"{source}: name {name!r} cannot be a file name in the output folder: "
+                         "use letters, digits, '-' and '_', with no '/' or '\\' and no leading '.'")
 
 
 def _flat_keys(schema, prefix=""):
