@@ -7,6 +7,7 @@ none) in place.
 from __future__ import annotations
 
 import contextlib
+import io
 import os
 import tempfile
 from pathlib import Path
@@ -40,9 +41,12 @@ def atomic_path(target: str | os.PathLike):
     try:
         yield Path(tmp)
         os.replace(tmp, target)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
+        if isinstance(exc, OSError) and exc.errno is not None and exc.filename is None:
+            # a write that failed (a full disk) names no file: the message names the result's
+            raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from exc
         raise
 
 
@@ -58,6 +62,25 @@ def write_text_atomic(target: str | os.PathLike, text: str) -> None:
     """
     with atomic_path(target) as tmp:
         tmp.write_text(text)
+
+
+@contextlib.contextmanager
+def hdf5_atomic(target: str | os.PathLike):
+    """Yield an ``h5py.File`` made in memory; when the block ends its bytes are written to
+    ``target`` atomically (`atomic_path`), and nothing is written if the block raises.
+
+    The HDF5 library then never writes to the disk itself: on a full disk its C-level
+    write errors crashed the process (a segmentation fault after hundreds of lines of
+    HDF5 diagnostics); here the write fails in Python, with its errno and the path.
+    A result file is a few megabytes, so holding it in memory costs nothing.
+    """
+    import h5py
+
+    buffer = io.BytesIO()
+    with h5py.File(buffer, "w") as handle:
+        yield handle
+    with atomic_path(target) as tmp:
+        tmp.write_bytes(buffer.getbuffer())
 
 
 def check_writable_folder(folder: str | os.PathLike) -> Path:

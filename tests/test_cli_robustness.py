@@ -336,3 +336,17 @@ def test_units_template_json_is_one_json_object_holding_the_template(cli):
     code, out, err = cli("units", "--template", "--json")
     assert code == 0 and err == ""
     assert json.loads(out) == {"format": "toml", "template": template()}
+
+
+def test_a_scenario_or_drive_file_saved_with_a_byte_order_mark_is_read(tmp_path):
+    """Windows editors start a UTF-8 file with a BOM; TOML took it for a statement
+    ('Invalid statement (line 1, column 1)'). CSV files already accepted it."""
+    from hdsim.model.catalog import load_unit
+    from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario
+
+    scenario = tmp_path / "bom.toml"
+    scenario.write_bytes(b"\xef\xbb\xbf" + builtin_scenario_path("lost_motion").read_bytes())
+    assert load_scenario(scenario).data == load_scenario("lost_motion").data
+    drive = tmp_path / "drive.toml"
+    drive.write_bytes(b"\xef\xbb\xbf" + b'name = "X"\nratio = 100\nrated_torque_Nm = 87\n')
+    assert load_unit(drive).name == "X"

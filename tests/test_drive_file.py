@@ -8,6 +8,7 @@ elastic lost-motion span (docs/physics.md §13), never values produced by the co
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -307,3 +308,17 @@ def test_units_template_saved_to_a_file_loads(tmp_path, cli):
         arcmin_to_rad(0.5))
     code, out, _ = cli("units", "--json")
     assert code == 0 and set(json.loads(out)) == {"default", "units"}
+
+
+@pytest.mark.parametrize("line, key", [
+    ("hysteresis_loss_arcmin = 1e6", "hysteresis_loss_arcmin = 1e+06"),
+    ("lost_motion_arcmin = 1e6", "lost_motion_arcmin = 1e+06"),
+    ("K1_Nm_per_rad = 1e-3", "K1_Nm_per_rad = 0.001"),
+])
+def test_a_refused_value_names_the_key_of_the_file_that_set_it(line, key, tmp_path):
+    """The user wrote the file's key, not the model parameter it sets: a refusal of the
+    parameter (friction.slip_max, backlash.gap, calibration.kappa_mesh) names both."""
+    path = tmp_path / "d.toml"
+    path.write_text(f'name = "X"\nratio = 100\nrated_torque_Nm = 87\n{line}\n')
+    with pytest.raises(InputError, match=rf"is outside .*\(set by the file's .*{re.escape(key)}"):
+        load_unit(path)

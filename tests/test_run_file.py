@@ -124,3 +124,26 @@ def test_cli_simulate_by_name_from_another_directory(tmp_path, monkeypatch, cli)
         payload["metrics"]["lost_motion_arcmin"])
     code, _, err = cli("simulate", "no_such_scenario", "--out", "out2")
     assert code == 2 and "lost_motion" in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_full_disk_fails_in_python_naming_the_file_and_leaves_nothing(default_lost_motion_run, tmp_path,
+                                                                         monkeypatch, cli):
+    """The HDF5 file is made in memory and written by Python (`hdsim.atomic.hdf5_atomic`): on a
+    full disk the HDF5 library's own writes had crashed the process (exit 139)."""
+    import errno
+    from pathlib import Path
+
+    def full(self, data):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(Path, "write_bytes", full)
+    with pytest.raises(OSError) as info:
+        default_lost_motion_run.save(tmp_path / "run.h5")
+    assert info.value.errno == errno.ENOSPC and info.value.filename == str(tmp_path / "run.h5")
+    assert list(tmp_path.iterdir()) == []  # not even the temporary file
+    from hdsim.cli import simulate
+
+    monkeypatch.setattr(simulate, "run_scenario", lambda *a, **k: default_lost_motion_run)
+    code, out, err = cli("simulate", "lost_motion", "--out", str(tmp_path / "o"), "--no-figures", cwd=tmp_path)
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert f"{tmp_path / 'o' / 'lost_motion.h5'}: No space left on device" in err

@@ -48,7 +48,7 @@ from pathlib import Path
 import numpy as np
 
 from hdsim.errors import InputError
-from hdsim.atomic import atomic_path
+from hdsim.atomic import atomic_path, hdf5_atomic
 from hdsim.io.import_options import ImportOptions, RowReport
 from hdsim.io.measurement_checks import (
     RATED_KEYS,
@@ -360,21 +360,18 @@ def save_measurement(meas: Measurement, path: str | os.PathLike) -> Path:
     path = Path(path)
     meta = _meta_for_writing(meas)
     cols = meas.columns()
-    with atomic_path(path) as tmp:
-        if path.suffix.lower() in HDF5_SUFFIXES:
-            import h5py
-
-            with h5py.File(tmp, "w") as handle:
-                for key, value in meta.items():
-                    handle.attrs[key] = value
-                for name, values in cols.items():
-                    handle.create_dataset(name, data=np.asarray(values, dtype=np.float64))
-        else:
-            with open(tmp, "w", encoding="utf-8", newline="\n") as out:
-                for key, value in meta.items():
-                    out.write(f"# {key}: {value}\n")
-                out.write(",".join(cols) + "\n")
-                # Python's float repr is the shortest exact round-trip text.
-                table = np.column_stack(list(cols.values())).tolist()
-                out.write("".join(",".join(map(repr, row)) + "\n" for row in table))
+    if path.suffix.lower() in HDF5_SUFFIXES:
+        with hdf5_atomic(path) as handle:
+            for key, value in meta.items():
+                handle.attrs[key] = value
+            for name, values in cols.items():
+                handle.create_dataset(name, data=np.asarray(values, dtype=np.float64))
+        return path
+    with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8", newline="\n") as out:
+        for key, value in meta.items():
+            out.write(f"# {key}: {value}\n")
+        out.write(",".join(cols) + "\n")
+        # Python's float repr is the shortest exact round-trip text.
+        table = np.column_stack(list(cols.values())).tolist()
+        out.write("".join(",".join(map(repr, row)) + "\n" for row in table))
     return path

@@ -148,7 +148,7 @@ def read_drive_file(path: str | os.PathLike) -> dict:
     """
     source = _label(path)
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        text = Path(path).read_text(encoding="utf-8-sig")  # a Windows editor's BOM is no statement
     except FileNotFoundError:
         raise InputError(f"{source}: drive file not found") from None
     except IsADirectoryError:
@@ -381,6 +381,24 @@ def load_drive_file(path: str | os.PathLike) -> HarmonicDrive:
     return drive_from_table(read_drive_file(path), _label(path))
 
 
+#: the model parameter a drive file's key sets, for a refusal that names the parameter
+#: (the user wrote the key, not the parameter)
+SET_BY = {"friction.slip_max": ("hysteresis_loss_arcmin",), "backlash.gap": ("lost_motion_arcmin", "ratio"),
+          "calibration.kappa_mesh": STIFFNESS_KEYS, "calibration.kappa_struct": STIFFNESS_KEYS,
+          "hardening.": STIFFNESS_KEYS + ("T1_Nm", "T2_Nm")}
+
+
+def _set_by(message: str, values: dict) -> str:
+    """'' or ", set by the file's KEY = VALUE": the keys of ``values`` behind the parameter a
+    refusal names."""
+    for parameter, keys in SET_BY.items():
+        if parameter in message:
+            shown = [f"{k} = {values[k]:g}" for k in keys if isinstance(values.get(k), (int, float))]
+            if shown:
+                return f" (set by the file's {', '.join(shown)})"
+    return ""
+
+
 def drive_from_table(table: dict, source: str) -> HarmonicDrive:
     """The unit of a drive file's table (what a run file stores to rebuild it).
 
@@ -436,7 +454,7 @@ def drive_from_table(table: dict, source: str) -> HarmonicDrive:
         if "lost_motion_arcmin" in values:
             model = model.with_updates({"backlash.gap": _gap(values, model, unit)})
     except InputError as exc:
-        raise InputError(f"{source}: {exc}") from None
+        raise InputError(f"{source}: {exc}{_set_by(str(exc), values)}") from None
     given = [k for k in values if k != "flexspline"] + [f"flexspline.{k}" for k in dims]
     scaled = [k for k in figures if k in how]
     note = {

@@ -33,7 +33,7 @@ import numpy as np
 import tomli_w
 
 from hdsim._version import __version__
-from hdsim.atomic import atomic_path
+from hdsim.atomic import hdf5_atomic
 from hdsim.errors import InputError
 from hdsim.model.catalog import load_unit
 from hdsim.model.drive import HarmonicDrive
@@ -60,30 +60,29 @@ def write_run_file(path, run) -> Path:
     """
     path = Path(path)
     result = run.result
-    with atomic_path(path) as tmp:
-        with h5py.File(tmp, "w") as f:
-            f.attrs.update(hdsim_version=__version__, unit=run.model.name, scenario=run.scenario.name,
-                           setup=result.setup,
-                           created=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"))
-            f.create_dataset("t", data=result.t).attrs["unit"] = "s"
-            for group, table in (("states", result.states), ("signals", result.signals)):
-                g = f.create_group(group)
-                for name, values in table.items():
-                    g.create_dataset(name, data=np.asarray(values), compression="gzip", compression_opts=4)
-            g = f.create_group("metrics")
-            for name, values in run.metrics.items():
-                g.create_dataset(name, data=np.asarray(values, dtype=float))
-            g = f.create_group("params")
-            for name, value in run.model.params().items():
-                g.create_dataset(name, data=np.asarray(value, dtype=float))
-            f.create_group("effects").attrs.update({s: e.id for s, e in run.model.effects().items()})
-            f.create_group("input_friction").attrs.update(_ripple(run.model.input_friction))
-            f.create_group("scenario").attrs["toml"] = tomli_w.dumps(run.scenario.data)
-            f.create_group("solver").attrs.update({k: v for k, v in result.solver.items()})
-            table = drive_table(run.model)
-            if table:  # the unit is not a built-in one: keep what rebuilds it
-                f.create_group("drive_file").attrs.update(toml=tomli_w.dumps(table),
-                                                          path=str(run.model.provenance["drive_file"]["path"]))
+    with hdf5_atomic(path) as f:
+        f.attrs.update(hdsim_version=__version__, unit=run.model.name, scenario=run.scenario.name,
+                       setup=result.setup,
+                       created=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"))
+        f.create_dataset("t", data=result.t).attrs["unit"] = "s"
+        for group, table in (("states", result.states), ("signals", result.signals)):
+            g = f.create_group(group)
+            for name, values in table.items():
+                g.create_dataset(name, data=np.asarray(values), compression="gzip", compression_opts=4)
+        g = f.create_group("metrics")
+        for name, values in run.metrics.items():
+            g.create_dataset(name, data=np.asarray(values, dtype=float))
+        g = f.create_group("params")
+        for name, value in run.model.params().items():
+            g.create_dataset(name, data=np.asarray(value, dtype=float))
+        f.create_group("effects").attrs.update({s: e.id for s, e in run.model.effects().items()})
+        f.create_group("input_friction").attrs.update(_ripple(run.model.input_friction))
+        f.create_group("scenario").attrs["toml"] = tomli_w.dumps(run.scenario.data)
+        f.create_group("solver").attrs.update({k: v for k, v in result.solver.items()})
+        table = drive_table(run.model)
+        if table:  # the unit is not a built-in one: keep what rebuilds it
+            f.create_group("drive_file").attrs.update(toml=tomli_w.dumps(table),
+                                                      path=str(run.model.provenance["drive_file"]["path"]))
     return path
 
 

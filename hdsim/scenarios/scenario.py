@@ -218,7 +218,7 @@ def read_toml(path, kind: str = "TOML") -> dict:
     """
     path = Path(path)
     try:
-        return tomllib.loads(path.read_text())
+        return tomllib.loads(path.read_text(encoding="utf-8-sig"))  # a Windows editor's BOM is no statement
     except FileNotFoundError:
         raise InputError(f"{path}: {kind} file not found") from None
     except IsADirectoryError:
