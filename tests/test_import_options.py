@@ -36,6 +36,10 @@ def test_factor_sources():
     assert split_factor("a*b") == ("a*b", 1.0)  # not a number in front: a plain name
     with pytest.raises(InputError, match="factor"):
         split_factor("0*iq_A")
+    for factor in ("inf", "-Infinity", "NaN"):  # refused as factors, not looked for as a column 'inf*iq_A'
+        with pytest.raises(InputError, match="the factor must be a finite non-zero number"):
+            split_factor(f"{factor}*iq_A")
+    assert split_factor("Info*2") == ("Info*2", 1.0)
 
 
 def test_options_refuse_nonsense():

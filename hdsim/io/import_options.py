@@ -31,7 +31,8 @@ from hdsim.signals import glitches
 __all__ = ["ImportOptions", "RowReport", "parse_window", "parse_meta", "split_factor", "apply_rows", "glitch_rows"]
 
 #: ``FACTOR*column`` in a column map: a number, a ``*``, then the file's column name
-_FACTOR = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*\*\s*(\S.*?)\s*$")
+_FACTOR = re.compile(r"^\s*([-+]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|inf(?:inity)?|nan))\s*\*\s*(\S.*?)\s*$",
+                     re.IGNORECASE)  # inf and nan are read, to be refused as factors
 
 
 @dataclass(frozen=True)
