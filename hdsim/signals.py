@@ -21,14 +21,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["NOISE_WINDOW", "RATE_STEP", "local_cubic_weights", "noise_level", "smoothed", "turning_points",
-           "torque_legs", "loading_direction", "loading_rates", "leg_loading", "rate_groups", "Breakaway",
+__all__ = ["NOISE_WINDOW", "RATE_STEP", "EVEN_SAMPLING", "local_cubic_weights", "noise_level", "evenly_sampled",
+           "smoothed", "turning_points", "torque_legs", "loading_direction", "loading_rates", "leg_loading", "rate_groups", "Breakaway",
            "angle_resolution", "breakaway_episodes", "glitches", "GLITCH_FACTOR"]
 
 #: samples of the local cubic fit that the noise estimate subtracts
 NOISE_WINDOW = 7
 #: two loading rates are distinct when they differ by more than this factor
 RATE_STEP = 1.5
+#: sample intervals within this share of their median count as even (`noise_level`)
+EVEN_SAMPLING = 0.01
 #: a glitch lies this many times the signal's local scale (its excursions and steps between
 #: rows) away from its two neighbours: white noise never gets there
 GLITCH_FACTOR = 20.0
@@ -45,17 +47,66 @@ def local_cubic_weights(window: int) -> np.ndarray:
     return np.linalg.pinv(np.vander(offsets, 4, increasing=True))[0]
 
 
-def noise_level(x) -> float:
-    """Rms of the white noise on a signal, estimated without a model (module text) [unit of x]."""
+def noise_level(x, time=None) -> float:
+    """Rms of the white noise on a signal, estimated without a model (module text) [unit of x].
+
+    With ``time`` [s] of a log whose sample intervals spread by more than
+    `EVEN_SAMPLING` of their median (a logger's jitter), the local cubic is fitted in time,
+    not in row number: a signal sampled unevenly is no smooth function of the row, and
+    45 % jitter read a ramp's steps as noise (an estimate 1.8 times too high). Below that
+    spread the row number is the better clock: a time stamp rounded to its printed digits
+    would add its own error.
+    """
     x = np.asarray(x, dtype=float)
     if x.size < NOISE_WINDOW:
         return 0.0
-    weights = local_cubic_weights(NOISE_WINDOW)
     half = NOISE_WINDOW // 2
+    if time is not None and not evenly_sampled(time):
+        residual, leverage = _local_cubic_in_time(x, np.asarray(time, dtype=float))
+        return float(np.median(np.abs(residual) / np.sqrt(1.0 - leverage)) / 0.6745)
+    weights = local_cubic_weights(NOISE_WINDOW)
     # centred windows only: the median of |residual| does not miss the few edge samples
     residual = x[half:x.size - half] - np.convolve(x, weights[::-1], mode="valid")
     # white noise of rms σ leaves σ²(1 − w₀) in x minus its local fit (w₀ the centre weight)
     return float(np.median(np.abs(residual)) / 0.6745 / math.sqrt(1.0 - weights[half]))
+
+
+def evenly_sampled(time) -> bool:
+    """Whether every sample interval of ``time`` is within `EVEN_SAMPLING` of their median."""
+    steps = np.diff(np.asarray(time, dtype=float))
+    if steps.size == 0:
+        return True
+    typical = float(np.median(steps))
+    return bool(typical > 0 and np.max(np.abs(steps - typical)) <= EVEN_SAMPLING * typical)
+
+
+def _local_cubic_in_time(x: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """At each centred window of `NOISE_WINDOW` samples: the centre value minus the least-squares
+    cubic in time through the window, and the centre's leverage h (white noise of rms σ
+    leaves σ²(1 − h) there).
+
+    With τ the times from the centre, the normal matrix is ``A_ij = Σ τ^(i+j)`` and the
+    centre row of the hat matrix is ``Σ_j (A⁻¹)_0j τ^j``: only sums of powers of τ, no
+    design matrix per window. In chunks of a few hundred thousand windows.
+    """
+    half = NOISE_WINDOW // 2
+    centres = np.arange(half, x.size - half)
+    residual, leverage = np.empty(centres.size), np.empty(centres.size)
+    for chunk in np.array_split(np.arange(centres.size), max(1, centres.size // 200_000)):
+        c = centres[chunk]
+        window = c[:, None] + np.arange(-half, half + 1)
+        tau = t[window] - t[c][:, None]
+        tau /= np.max(np.abs(tau), axis=1, keepdims=True)  # conditioning only: the fit is the same
+        powers = [np.ones_like(tau), tau]
+        for _ in range(5):
+            powers.append(powers[-1] * tau)  # τ⁰ … τ⁶
+        sums = np.stack([p.sum(axis=1) for p in powers], axis=1)  # (m, 7)
+        normal = sums[:, np.add.outer(np.arange(4), np.arange(4))]  # (m, 4, 4): A_ij = S_(i+j)
+        first = np.linalg.solve(normal, np.broadcast_to(np.eye(4)[:, :1], (c.size, 4, 1)))[..., 0]
+        weights = sum(first[:, k:k + 1] * powers[k] for k in range(4))  # (m, window)
+        residual[chunk] = x[c] - np.sum(weights * x[window], axis=1)
+        leverage[chunk] = weights[:, half]
+    return residual, leverage
 
 
 def glitches(x) -> np.ndarray:
@@ -283,7 +334,7 @@ def breakaway_episodes(time, angle, torque, rest_s: float = 0.1) -> list[Breakaw
     # the rests: [first row, one past the last) of each run of rows at rest, in time order
     starts = np.flatnonzero(at_rest & ~np.r_[False, at_rest[:-1]])
     ends = np.flatnonzero(at_rest & ~np.r_[at_rest[1:], False]) + 1
-    noise = noise_level(T)
+    noise = noise_level(T, t)
     smooth, _ = smoothed(T, noise)
     average = max(int(0.02 / dt), 3)
     out = []

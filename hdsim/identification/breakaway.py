@@ -106,7 +106,7 @@ class BreakawayRecord:
             speed[held] = accel[held] = 0.0
             moving[held.start:s.stop] = True
             direction[held.start:s.stop] = s.direction
-        return cls(meas, speed, accel, torque, side, starts, moving, direction, noise_level(torque))
+        return cls(meas, speed, accel, torque, side, starts, moving, direction, noise_level(torque, meas.time))
 
     def starting_torques(self) -> dict:
         """Per direction: the mean starting torque of its starts and its standard

@@ -114,7 +114,7 @@ class SweepRecord:
         torque = np.asarray(meas.torque, dtype=float) / side
         turns = float(np.ptp(meas.angle)) / (2.0 * math.pi)
         return cls(meas, speed, accel, torque, side, segments, moving, 0.05 * slowest,
-                   noise_level(torque), turns)
+                   noise_level(torque, meas.time), turns)
 
     @property
     def plateau_speeds(self) -> np.ndarray:

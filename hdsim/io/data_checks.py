@@ -141,7 +141,7 @@ def run_checks(meas, drive: DriveScale) -> tuple[list[Check], dict]:
     t = np.asarray(meas.time, dtype=float)
     ke = meas.test == "kinematic_error"
     response = np.asarray(meas.kinematic_error if ke else meas.angle, dtype=float)
-    torque_noise = noise_level(T)
+    torque_noise = noise_level(T, t)
     smooth_T, turns = torque_legs(T)
     swing = float(np.ptp(smooth_T))
     rates = loading_rates(t, smooth_T, turns)
@@ -180,7 +180,7 @@ def run_checks(meas, drive: DriveScale) -> tuple[list[Check], dict]:
         found = _saturation(name, x)
         if found:
             checks.append(found)
-    floor = noise_level(_without_wg_orders(response, meas.wg_angle, meas.ratio) if ke else response)
+    floor = noise_level(_without_wg_orders(response, meas.wg_angle, meas.ratio) if ke else response, t)
     figures = {"noise_floor_rad": floor, "torque_noise_Nm": torque_noise,
                "reversals": reversals, "loading_rates": len(rate_groups(rates))}
     return checks, figures

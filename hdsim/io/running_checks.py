@@ -263,7 +263,7 @@ def running_checks(meas, drive) -> tuple[list, dict]:
         ``reversals`` and, with a temperature column, ``temperature_span_K``.
     """
     torque = np.asarray(meas.torque, dtype=float)
-    noise = noise_level(torque)
+    noise = noise_level(torque, meas.time)
     data = {"noise_floor_Nm": noise, "torque_noise_Nm": noise}
     _, _, segments = sweep_kinematics(meas.time, meas.wg_angle)
     checks = []
