@@ -1,16 +1,45 @@
 """Write files atomically: to a temporary file beside the target, then rename.
 
 A reader never sees a half-written result, and a crash leaves the old file (or
-none) in place.
+none) in place. Inside `atomic_group` the renames wait for the end of the block, so the
+files of one result (a run's HDF5 file and its figures) appear together or not at all.
 """
 
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import io
 import os
 import tempfile
 from pathlib import Path
+
+
+#: the (temporary, target) renames an `atomic_group` holds back, or None outside one
+_PENDING: contextvars.ContextVar[list | None] = contextvars.ContextVar("hdsim_atomic_group", default=None)
+
+
+@contextlib.contextmanager
+def atomic_group():
+    """Files written with `atomic_path` inside the block replace their targets together
+    when it ends; if it raises, none does and the temporary files are removed.
+
+    A full disk while the third figure of a run is saved then leaves the folder as it was,
+    not a new result file beside the old figures.
+    """
+    pending: list = []
+    token = _PENDING.set(pending)
+    try:
+        yield
+    except BaseException:
+        for tmp, _ in pending:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(tmp)
+        raise
+    finally:
+        _PENDING.reset(token)
+    for tmp, target in pending:
+        os.replace(tmp, target)
 
 
 @contextlib.contextmanager
@@ -40,7 +69,11 @@ def atomic_path(target: str | os.PathLike):
     os.chmod(tmp, 0o666 & ~umask)
     try:
         yield Path(tmp)
-        os.replace(tmp, target)
+        group = _PENDING.get()
+        if group is None:
+            os.replace(tmp, target)
+        else:  # the group renames it with the others when it ends
+            group.append((tmp, target))
     except BaseException as exc:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)

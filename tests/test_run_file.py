@@ -147,3 +147,35 @@ def test_a_full_disk_fails_in_python_naming_the_file_and_leaves_nothing(default_
     code, out, err = cli("simulate", "lost_motion", "--out", str(tmp_path / "o"), "--no-figures", cwd=tmp_path)
     assert code == 2 and out == "" and err.count("\n") == 1
     assert f"{tmp_path / 'o' / 'lost_motion.h5'}: No space left on device" in err
+
+
+def test_a_run_whose_figure_cannot_be_saved_leaves_the_folder_as_it_was(default_lost_motion_run, tmp_path,
+                                                                          monkeypatch):
+    """The result file and its figures are written as one group (`hdsim.atomic.atomic_group`):
+    a full disk at the second figure left a new result file beside the old figures."""
+    import errno
+
+    import matplotlib.figure
+
+    from hdsim.cli._common import write_outputs
+
+    out = tmp_path / "o"
+    first = write_outputs(default_lost_motion_run, out)
+    for path in out.iterdir():  # an earlier result: any file replaced shows
+        path.write_bytes(b"earlier " + path.name.encode())
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert len(before) == 3
+    saved = []
+    real = matplotlib.figure.Figure.savefig
+
+    def full_at_the_second(self, *args, **kwargs):
+        saved.append(args[0])
+        if len(saved) == 2:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", full_at_the_second)
+    with pytest.raises(OSError):
+        write_outputs(default_lost_motion_run, out)
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before  # nothing replaced, no temporary left
+    assert sorted(first) == ["loop_figure", "result", "time_figure"]

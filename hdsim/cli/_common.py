@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from hdsim.atomic import atomic_group
 from hdsim.cli._guards import require_finite
 from hdsim.errors import InputError, unknown_name
 from hdsim.model.drive import HarmonicDrive
@@ -166,13 +167,14 @@ def write_outputs(run, out_dir: Path, figures: bool = True) -> dict[str, str]:
     """
     finite_metrics(run)  # a run that overflowed leaves no file behind, whoever writes it
     out_dir = Path(out_dir)
-    paths = {"result": str(run.save(out_dir / f"{run.scenario.name}.h5"))}
-    if figures:
-        for kind, draw in _figures(run.result.setup).items():
-            figure = draw(run)
-            if figure is None:  # a figure this run has nothing for (a sweep's, on another profile)
-                continue
-            path = out_dir / f"{run.scenario.name}_{kind}.png"
-            save_figure(figure, path)
-            paths[f"{kind}_figure"] = str(path)
+    with atomic_group():  # the result file and its figures appear together, or none does
+        paths = {"result": str(run.save(out_dir / f"{run.scenario.name}.h5"))}
+        if figures:
+            for kind, draw in _figures(run.result.setup).items():
+                figure = draw(run)
+                if figure is None:  # a figure this run has nothing for (a sweep's, on another profile)
+                    continue
+                path = out_dir / f"{run.scenario.name}_{kind}.png"
+                save_figure(figure, path)
+                paths[f"{kind}_figure"] = str(path)
     return paths
