@@ -53,7 +53,7 @@ def noise_level(x, time=None) -> float:
     With ``time`` [s] of a log whose sample intervals spread by more than
     `EVEN_SAMPLING` of their median (a logger's jitter), the local cubic is fitted in time,
     not in row number: a signal sampled unevenly is no smooth function of the row, and
-    45 % jitter read a ramp's steps as noise (an estimate 1.8 times too high). Below that
+    45 % jitter read a swing's steps as noise (an estimate 2.2 times too high). Below that
     spread the row number is the better clock: a time stamp rounded to its printed digits
     would add its own error.
     """
