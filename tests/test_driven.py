@@ -64,12 +64,36 @@ def test_kinematic_error_scenario_reports_the_contract_metrics():
     ({"input": {"mode": "prescribed", "profile": "hold"}, "metrics": ["wobble"]}, "metric"),
     ({"input": {"mode": "prescribed", "profile": "hold"}, "input_friction": {"model": "magic"}}, "catalog"),
     ({"input": {"mode": "prescribed", "profile": "sine", "frequency_Hz": -1.0}}, "frequency_Hz"),
+    # found by a tester: each of these went on to the solver or a formula and failed there (exit 1),
+    # or ran something else than the keys say
+    ({"input": {"mode": "prescribed", "profile": "constant", "speed_rpm": float("nan")}},
+     "input.speed_rpm must be a finite"),
+    ({"input": {"mode": "prescribed", "profile": "hold"}, "load": {"profile": "constant", "torque": float("nan")}},
+     "load.torque must be a finite"),
+    ({"input": {"mode": "prescribed", "profile": "hold"}, "analysis": {"orders": ["x"]}}, "list of numbers"),
+    ({"input": {"mode": "prescribed", "profile": "hold"}, "output": {"samples_per_wg_rev": 0}}, "1 or more"),
+    ({"input": {"mode": "prescribed", "profile": "hold"}, "efficiency": {"speed_rpm": 0.0}}, "speed_rpm must be > 0"),
+    ({"input": {"mode": "prescribed", "profile": "reversal", "speed_rpm": 2000.0, "output_revolutions": 0.05,
+                "settle_revolutions": 0.05}}, "would share no angle"),
+    ({"input": {"mode": "pi", "profile": "hold"}, "controller": {"position_gain_per_s": 50.0}}, "position_loop is"),
+    ({"input": {"mode": "pi", "profile": "hold"}, "controller": {"position_loop": "yes", "position_gain_per_s": 0.0}},
+     "is no loop"),
+    ({"input": {"mode": "prescribed", "profile": "hold"}, "input_friction": {"load_coefficient": 1.5}}, "<= 0.9"),
 ])
 def test_bad_scenarios_are_refused_in_one_line(tables, message):
     with pytest.raises(InputError) as info:
         bench_from_scenario(load_unit(), scenario(**tables))
     text = str(info.value)
     assert message in text and "\n" not in text
+
+
+def test_the_quasi_static_evaluator_refuses_a_motor_loop():
+    """Forced on a pi-mode scenario it held the motor on its reference: a load step's peak of
+    243 arcsec against the loop's 1039, with exit 0."""
+    from hdsim.scenarios.run import run_scenario
+
+    with pytest.raises(InputError, match="needs the dynamic model"):
+        run_scenario(load_unit(), load_scenario(ROOT / "scenarios/load_step.toml"), evaluator="quasistatic")
 
 
 def test_schema_rejects_unknown_keys_and_wrong_types():

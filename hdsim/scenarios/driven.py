@@ -48,6 +48,46 @@ def _positive(table, key, default, where, allow_zero=False):
     return value
 
 
+def _refuse_non_finite(data: dict, src) -> None:
+    """Every number of the scenario's tables, in lists too, is finite: a NaN speed or load went
+    on to the solver and failed there as the program's error. A list (orders, speeds, ripple
+    amplitudes) holds numbers only."""
+    for table, values in data.items():
+        if not isinstance(values, dict):
+            continue
+        for key, value in values.items():
+            items = value if isinstance(value, list) else [value]
+            if isinstance(value, list) and not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                                   for v in items):
+                raise InputError(f"{src}: {table}.{key} must be a list of numbers, got {value!r}")
+            if any(isinstance(v, float) and not np.isfinite(v) for v in items):
+                raise InputError(f"{src}: {table}.{key} must be a finite number, got {value!r}")
+
+
+def _check_tables(data: dict, src) -> None:
+    """The ranges the runs' formulas need: an efficiency measured at a speed and a load (its
+    ratio divides by both), at least one output sample per WG turn."""
+    efficiency = data.get("efficiency", {})
+    _positive(efficiency, "speed_rpm", 2000.0, f"{src}: efficiency")
+    _positive(efficiency, "load", 1.0, f"{src}: efficiency")
+    if int(data.get("output", {}).get("samples_per_wg_rev", 64)) < 1:
+        raise InputError(f"{src}: output.samples_per_wg_rev must be 1 or more")
+
+
+def _refuse_contradictions(ctl: dict, position_loop: bool, src) -> None:
+    """A controller table whose keys say two things: a position gain without the loop (it ran
+    anyway) or the loop with a zero gain (it ran as none). (``kp`` and ``ki`` beside
+    ``bandwidth_Hz`` are no contradiction: they replace the gains it tunes, so that a built-in
+    scenario's loop can be retuned with ``--set``.)"""
+    gain = ctl.get("position_gain_per_s")
+    if gain is not None and not position_loop:
+        raise InputError(f"{src}: controller.position_gain_per_s is the gain of the position loop, and "
+                         "controller.position_loop is \"no\"; set it to \"yes\" or leave the gain out")
+    if gain is not None and float(gain) == 0.0:
+        raise InputError(f"{src}: controller.position_loop = \"yes\" with position_gain_per_s = 0 is no loop; "
+                         "give a gain, or set position_loop = \"no\"")
+
+
 def _yes(value, key, where) -> bool:
     if value not in ("yes", "no"):
         raise InputError(f"{where}: {key} must be \"yes\" or \"no\", got {value!r}")
@@ -87,6 +127,8 @@ def bench_from_scenario(model: HarmonicDrive, scenario) -> Bench:
     """
     src = scenario.source
     data = scenario.data
+    _refuse_non_finite(data, src)
+    _check_tables(data, src)
     for name in scenario.metrics:
         if name not in DRIVEN_METRICS:
             raise unknown_name(f"metric in scenario {scenario.name}", name, DRIVEN_METRICS)
@@ -123,9 +165,12 @@ def bench_from_scenario(model: HarmonicDrive, scenario) -> Bench:
         motion = constant_speed_motion(speed, N, ramp, _positive(inp, "output_revolutions", 1.0, src),
                                        _positive(inp, "settle_revolutions", 0.05, src, allow_zero=True))
     elif profile == "reversal":
-        motion = reversal_motion(speed, N, ramp, _positive(inp, "output_revolutions", 1.0, src),
-                                 _positive(inp, "settle_revolutions", 0.05, src, allow_zero=True),
-                                 _positive(inp, "dwell_s", 0.1, src, allow_zero=True))
+        travel = _positive(inp, "output_revolutions", 1.0, src)
+        settle = _positive(inp, "settle_revolutions", 0.05, src, allow_zero=True)
+        if settle >= travel:  # the passes are measured over the travel less the settling: nothing in common
+            raise InputError(f"{src}: input.settle_revolutions ({settle:g}) must be less than "
+                             f"input.output_revolutions ({travel:g}): the two passes would share no angle")
+        motion = reversal_motion(speed, N, ramp, travel, settle, _positive(inp, "dwell_s", 0.1, src, allow_zero=True))
     elif profile == "trapezoid":
         back = _yes(inp.get("return", "yes"), "input.return", src)
         move = np.deg2rad(float(inp.get("move_deg", 90.0)))
@@ -189,9 +234,10 @@ def bench_from_scenario(model: HarmonicDrive, scenario) -> Bench:
     ctl = data.get("controller", {})
     if mode == "pi":
         J_total = float(np.max(model.drive.J_in)) + (float(np.max(model.drive.J_out)) + load_inertia) / N**2
+        position_loop = _yes(ctl.get("position_loop", "no"), "controller.position_loop", src)
+        _refuse_contradictions(ctl, position_loop, src)
         base = PIController.tuned(J_total, _positive(ctl, "bandwidth_Hz", 30.0, src),
-                                  _yes(ctl.get("feedforward", "yes"), "controller.feedforward", src),
-                                  _yes(ctl.get("position_loop", "no"), "controller.position_loop", src))
+                                  _yes(ctl.get("feedforward", "yes"), "controller.feedforward", src), position_loop)
         controller = PIController(kp=_positive(ctl, "kp", base.kp, src), ki=_positive(ctl, "ki", base.ki, src,
                                                                                       allow_zero=True),
                                   feedforward_inertia=base.feedforward_inertia,
@@ -264,6 +310,10 @@ def run_driven_quasistatic(model: HarmonicDrive, scenario, *, samples_per_segmen
     if samples_per_segment:
         scenario = scenario.with_updates({"output.samples_per_wg_rev": int(samples_per_segment)})
     bench = bench_from_scenario(model, scenario)
+    if bench.mode != "prescribed":  # it would hold the motor on its reference: no following error at all
+        raise InputError(f"{scenario.source}: the quasi-static evaluator moves the wave generator as "
+                         f"prescribed; input.mode = \"{bench.mode}\" (a motor loop that yields) needs the "
+                         "dynamic model (--evaluator dynamic or auto)")
     t_eval = bench.sample_times()
     refuse_if_too_large(scenario.source, samples=t_eval.size, duration=bench.t_end, batch=model.batch_size,
                         min_steps=t_eval.size, set_by="the input and load durations and the output sampling")
