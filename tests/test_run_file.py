@@ -179,3 +179,11 @@ def test_a_run_whose_figure_cannot_be_saved_leaves_the_folder_as_it_was(default_
         write_outputs(default_lost_motion_run, out)
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before  # nothing replaced, no temporary left
     assert sorted(first) == ["loop_figure", "result", "time_figure"]
+
+
+def test_a_driven_runs_windows_survive_the_file(short_ke_run, tmp_path):
+    """The tutorial reads the metric windows from ``result.metadata["windows"]``: a saved and
+    read run had lost them (and the input mode and profile)."""
+    back = read_run(short_ke_run.save(tmp_path / "ke.h5"))
+    for key in ("windows", "input_mode", "profile"):
+        assert back.result.metadata[key] == short_ke_run.result.metadata[key], key

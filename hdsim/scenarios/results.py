@@ -13,6 +13,7 @@ Layout of a run file (one run, or a batch of ``M`` runs)::
                      its scalar fields are in /params as input_friction.NAME)
     /scenario        attrs: toml (the scenario table as TOML text)
     /solver          attrs: method, rtol, nfev, ...
+    /bench           attrs: json (a driven run's metric windows, input mode and profile)
     /drive_file      attrs: toml, path (only for a unit read from a drive file)
 
 Written atomically (a temporary file, then a rename). `hdsim.scenarios.run.Run.save`
@@ -25,6 +26,7 @@ applied (docs/tutorial-first-simulation.md).
 from __future__ import annotations
 
 import datetime as _dt
+import json
 import tomllib
 from pathlib import Path
 
@@ -79,11 +81,19 @@ def write_run_file(path, run) -> Path:
         f.create_group("input_friction").attrs.update(_ripple(run.model.input_friction))
         f.create_group("scenario").attrs["toml"] = tomli_w.dumps(run.scenario.data)
         f.create_group("solver").attrs.update({k: v for k, v in result.solver.items()})
+        # what a bench says of its run (a driven run's metric windows, input mode, profile)
+        bench = {k: result.metadata[k] for k in BENCH_METADATA if k in result.metadata}
+        if bench:
+            f.create_group("bench").attrs["json"] = json.dumps(bench)
         table = drive_table(run.model)
         if table:  # the unit is not a built-in one: keep what rebuilds it
             f.create_group("drive_file").attrs.update(toml=tomli_w.dumps(table),
                                                       path=str(run.model.provenance["drive_file"]["path"]))
     return path
+
+
+#: the result metadata a bench adds to its run (`hdsim.scenarios.driven`), kept in the file
+BENCH_METADATA = ("windows", "input_mode", "profile")
 
 
 def read_run_file(path) -> tuple[HarmonicDrive, Scenario, SimulationResult, dict]:
@@ -101,8 +111,8 @@ def read_run_file(path) -> tuple[HarmonicDrive, Scenario, SimulationResult, dict
         (or the stored drive-file table) with the stored parameters and effects, the
         scenario (its ``source`` is the file), the result (times [s], states, signals,
         solver statistics; ``metadata`` holds the file's ``unit``, ``scenario``,
-        ``hdsim_version``, ``created`` and ``evaluator``, the one that ran) and the
-        metrics ``{name: (M,)}``.
+        ``hdsim_version``, ``created`` and ``evaluator``, the one that ran, and a driven
+        run's ``windows``, ``input_mode`` and ``profile``) and the metrics ``{name: (M,)}``.
 
     Raises
     ------
@@ -126,6 +136,8 @@ def read_run_file(path) -> tuple[HarmonicDrive, Scenario, SimulationResult, dict
             metadata = {k: attrs[k] for k in ("unit", "scenario", "hdsim_version", "created") if k in attrs}
             # the solver's method names the evaluator that ran: not stored twice
             metadata["evaluator"] = "quasistatic" if solver.get("method") == "quasistatic" else "dynamic"
+            if "bench" in f:
+                metadata.update(json.loads(str(f["bench"].attrs["json"])))
             result = SimulationResult(t=f["t"][()], states=states, signals=signals, setup=str(attrs["setup"]),
                                       solver=solver, metadata=metadata)
             effects = {k: str(v) for k, v in f["effects"].attrs.items()}
