@@ -94,6 +94,9 @@ def test_the_quasi_static_evaluator_refuses_a_motor_loop():
 
     with pytest.raises(InputError, match="needs the dynamic model"):
         run_scenario(load_unit(), load_scenario(ROOT / "scenarios/load_step.toml"), evaluator="quasistatic")
+    # forced on metrics it has no signals for it had crashed in the linearisation (exit 1)
+    with pytest.raises(InputError, match="does not compute the metric groups frequency_response"):
+        run_scenario(load_unit(), load_scenario(ROOT / "scenarios/frequency_sweep.toml"), evaluator="quasistatic")
 
 
 def test_schema_rejects_unknown_keys_and_wrong_types():

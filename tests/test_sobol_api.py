@@ -82,3 +82,27 @@ def test_the_cli_keeps_its_option_words(cli, bounds, fragment):
                          "--bounds", *bounds, "--json")
     lines = err.strip().splitlines()
     assert code == 2 and out == "" and len(lines) == 1 and fragment in lines[0], err
+
+
+@pytest.mark.parametrize("params, options, message", [
+    # found by a tester: each ran, and its indices described something else than was asked
+    (["h_pz", "flexspline.h_pz"], {}, r"parameter flexspline.h_pz is named twice \('h_pz', 'flexspline.h_pz'\)"),
+    ({"h_pz": None, "h_c": (-0.7e-3, 0.7e-3)}, {}, r"the range of h_c reaches -0.0007, a drive the model refuses"),
+    (["h_pz"], {"seed": -1}, "seed must be a whole number, 0 or more"),
+    (["h_pz"], {"seed": "a"}, "seed must be a whole number, 0 or more"),
+])
+def test_a_study_that_would_not_be_the_one_asked_for_is_refused_before_it_runs(params, options, message, monkeypatch):
+    from hdsim.sensitivity import study
+
+    monkeypatch.setattr(study, "evaluate", lambda *a, **k: pytest.fail("the study ran"), raising=False)
+    with pytest.raises(InputError, match=message):
+        hdsim.sobol("CSG-25-100", params, "lost_motion_arcmin", range=0.1, n=16, **options)
+
+
+def test_the_files_beside_the_study_file_are_checked_before_the_study(tmp_path, cli):
+    """With --out s.h5 the summary s.json goes beside it: a folder of that name had failed the
+    finished study as an internal error, its figures left without their summary."""
+    (tmp_path / "s.json").mkdir()
+    code, _, err = cli("sobol", "--function", "ishigami", "--n", "64", "--out", str(tmp_path / "s.h5"), cwd=tmp_path)
+    assert code == 2 and "s.json is a folder" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.json"]

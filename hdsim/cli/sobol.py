@@ -84,6 +84,10 @@ def run(args) -> int:
         check_output_file(args.out, "--out")
     if args.report:
         check_output_folder(args.report, "--report", names=_REPORT_FILES)
+    elif args.out:  # the summary and the figures go beside the study file
+        stem = Path(args.out).stem
+        check_output_folder(Path(args.out).parent, "--out", names=tuple(name.replace("sobol", stem, 1)
+                                                                         for name in _REPORT_FILES))
     # a broken model is ModelError (bad input, exit 2); anything else that fails here, a
     # broken process pool included, is the program's failure and reaches main (exit 1)
     func, problem, output, model, analytic = _resolve(args, models)
@@ -184,7 +188,8 @@ def _extras(args, model, analytic, names, result) -> dict:
     return extra
 
 
-#: what ``--report DIR`` holds (`_write_outputs`): checked before the study
+#: what ``--report DIR`` holds (`_write_outputs`; beside ``--out`` the stem is the study file's):
+#: checked before the study
 _REPORT_FILES = ("sobol.json", "sobol_indices.png", "sobol_convergence.png")
 
 

@@ -28,7 +28,7 @@ from hdsim.scenarios.profile_csv import read_profile_csv
 from hdsim.scenarios.setups import Setup
 from hdsim.simulation.controller import PIController
 from hdsim.simulation.driven import SETUP, Bench, scalar_ratio
-from hdsim.simulation.driven_quasistatic import criterion, driven_signals
+from hdsim.simulation.driven_quasistatic import QUASISTATIC_GROUPS, criterion, driven_signals
 from hdsim.simulation.loads import NO_LOAD, csv_load, opposing_load, ramped_load, step_load, sweep_load
 from hdsim.simulation.motion import (constant_speed_motion, csv_motion, hold_motion, reversal_motion, sine_motion,
                                      sweep_motion, trapezoid_motion)
@@ -314,6 +314,12 @@ def run_driven_quasistatic(model: HarmonicDrive, scenario, *, samples_per_segmen
         raise InputError(f"{scenario.source}: the quasi-static evaluator moves the wave generator as "
                          f"prescribed; input.mode = \"{bench.mode}\" (a motor loop that yields) needs the "
                          "dynamic model (--evaluator dynamic or auto)")
+    # forced, it may run where its time scales do not hold; never for metrics it has no signals for
+    # (a linearisation needs the states; a running torque, the input's dynamics)
+    others = [g for g in bench.metrics if g not in QUASISTATIC_GROUPS]
+    if others:
+        raise InputError(f"{scenario.source}: the quasi-static evaluator does not compute the metric groups "
+                         f"{', '.join(others)}; they need the dynamic model (--evaluator dynamic or auto)")
     t_eval = bench.sample_times()
     refuse_if_too_large(scenario.source, samples=t_eval.size, duration=bench.t_end, batch=model.batch_size,
                         min_steps=t_eval.size, set_by="the input and load durations and the output sampling")

@@ -58,6 +58,7 @@ def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, 
     # nominal values only matter for --range
     nominal = {} if range_frac is None else batch.nominal_values(drive, list(names))
     problem = build_problem(names, nominal, range_frac, bounds, dists, wording or CLI_WORDING)
+    _refuse_unbuildable_ends(drive, problem, batch.resolve_names(drive, list(problem.names)))
     # a built-in name travels as a name; anything else (a drive file too) as the model read
     # here, so the workers neither re-read a file nor depend on the working folder
     by_name = isinstance(unit, str) and "drive_file" not in drive.provenance
@@ -67,6 +68,21 @@ def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, 
              "fingerprint": batch.drive_fingerprint(drive, func.scenario, func.evaluator),
              "evaluator": func.evaluator}
     return func, problem, output, model, None
+
+
+def _refuse_unbuildable_ends(drive, problem, dotted: list) -> None:
+    """Each end of a uniform range, the other parameters at their nominal values, is a drive
+    the model accepts: a range reaching a negative wall thickness had left three blocks in
+    four of the design to fail, and the indices described the corner that ran, not the
+    range asked for. (A combination of ends may still fail; those blocks are counted.)"""
+    for name, key, (low, high), dist in zip(problem.names, dotted, problem.bounds, problem.dists):
+        if dist != "unif":
+            continue
+        for value in (low, high):
+            try:
+                drive.with_updates({key: value})
+            except InputError as exc:
+                raise InputError(f"the range of {name} reaches {value:g}, a drive the model refuses: {exc}") from None
 
 
 def from_function(name, output=None):

@@ -169,6 +169,10 @@ def resolve_names(drive, names) -> list[str]:
             resolved.append(f"flexspline.{name}")
         else:
             raise unknown_name("parameter", name, list(known) + sorted(design))
+    twice = sorted({n for n in resolved if resolved.count(n) > 1})
+    if twice:  # 'h_pz' and 'flexspline.h_pz': one input under two names, the second column overwrote the first
+        given = ", ".join(repr(n) for n, r in zip(names, resolved) if r == twice[0])
+        raise InputError(f"parameter {twice[0]} is named twice ({given}): a study varies each parameter once")
     return resolved
 
 

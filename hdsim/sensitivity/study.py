@@ -121,13 +121,15 @@ def run_study(func, problem, n, *, seed=0, second_order=False, replicates=4, exe
     Raises
     ------
     InputError
-        On a bad N, R or target width, an existing ``out`` without ``resume``, a study
+        On a bad N, R, seed or target width, an existing ``out`` without ``resume``, a study
         file of another definition, or too few successful blocks.
     hdsim.sensitivity.evaluate.ModelError
         When the model fails on every row of the first few hundred.
     """
     t0, log = time.perf_counter(), log or _stderr
     check_sizes(n, replicates)
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise InputError(f"seed must be a whole number, 0 or more, got {seed!r}")
     if target_width is not None and not target_width > 0:
         raise InputError(f"--target-width must be > 0, got {target_width}")
     definition = {"problem": problem.to_dict(), "seed": int(seed),
