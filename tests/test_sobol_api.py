@@ -106,3 +106,26 @@ def test_the_files_beside_the_study_file_are_checked_before_the_study(tmp_path, 
     code, _, err = cli("sobol", "--function", "ishigami", "--n", "64", "--out", str(tmp_path / "s.h5"), cwd=tmp_path)
     assert code == 2 and "s.json is a folder" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.json"]
+
+
+def _fails_above_a_quarter(X):
+    """A model that fails on most of its box (module level: it must pickle)."""
+    import numpy as np
+
+    X = np.asarray(X)
+    if np.any(X[:, 0] > 0.25):
+        raise RuntimeError("too big")
+    return X[:, 0] + X[:, 1]
+
+
+def test_a_study_left_with_too_few_blocks_says_its_failures_before_the_refusal():
+    """'see the failures above' had come with no failure above: they were listed only after a
+    study that could be analysed."""
+    from hdsim.sensitivity.problem import Problem
+    from hdsim.sensitivity.study import run_study
+
+    said = []
+    problem = Problem(names=("a", "b"), bounds=((0.0, 1.0), (0.0, 1.0)), dists=("unif", "unif"))
+    with pytest.raises(InputError, match="see the failures above"):
+        run_study(_fails_above_a_quarter, problem, 16, workers=1, log=said.append)
+    assert any("failed: RuntimeError: too big" in line for line in said)

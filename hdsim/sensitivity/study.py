@@ -136,7 +136,7 @@ def run_study(func, problem, n, *, seed=0, second_order=False, replicates=4, exe
                   "second_order": bool(second_order), "replicates": int(replicates),
                   "model": model or {}}
     store = open_store(definition, n, out, resume)
-    evaluated_now = 0
+    evaluated_now, n_stage = 0, None
     try:
         before = store.counts(n)
         for n_stage in _stages(n, replicates, target_width):
@@ -160,6 +160,10 @@ def run_study(func, problem, n, *, seed=0, second_order=False, replicates=4, exe
                            evaluated=store.read("status", prefix) != PENDING,
                            conf_level=conf_level, num_resamples=num_resamples, seed=seed)
         counts = store.counts(n_stage)
+    except InputError:
+        if n_stage is not None:  # too few blocks left: the failures that dropped them come first
+            _report_failures(_failure_records(store, n_stage), store, log)
+        raise
     finally:
         # Failure messages are metadata: written only here, with no chunk in flight
         # (also after Ctrl-C or a model that fails everywhere, to help the diagnosis).
