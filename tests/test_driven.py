@@ -79,6 +79,11 @@ def test_kinematic_error_scenario_reports_the_contract_metrics():
     ({"input": {"mode": "pi", "profile": "hold"}, "controller": {"position_loop": "yes", "position_gain_per_s": 0.0}},
      "is no loop"),
     ({"input": {"mode": "prescribed", "profile": "hold"}, "input_friction": {"load_coefficient": 1.5}}, "<= 0.9"),
+    ({"input": {"mode": "prescribed", "profile": "hold"}, "linearise": {"load": 50.0}}, "within ±5"),
+    ({"input": {"mode": "prescribed", "profile": "hold"}, "linearise": {"f_min_Hz": -5.0}}, "f_min_Hz must be > 0"),
+    ({"input": {"mode": "prescribed", "profile": "hold"}, "linearise": {"compare_below": 5.0}}, "in (0, 1]"),
+    ({"input": {"mode": "prescribed", "profile": "constant", "speed_rpm": 100.0},
+      "load": {"profile": "opposing", "torque": -0.25}}, "its sign follows the motion"),
 ])
 def test_bad_scenarios_are_refused_in_one_line(tables, message):
     with pytest.raises(InputError) as info:

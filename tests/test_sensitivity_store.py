@@ -210,6 +210,23 @@ def test_store_refuses_other_definitions_and_overwrites(tmp_path):
             run_study(F, F.problem(), 64, out=out, resume=True, workers=1, progress=False, **kw)
 
 
+@pytest.mark.parametrize("damage", ["definition", "status", "failures"])
+def test_a_damaged_study_file_is_refused_as_bad_input(tmp_path, damage):
+    """A study file edited or cut by hand had ended in a JSONDecodeError or a KeyError, reported
+    as a bug in hdsim (exit 1)."""
+    out = tmp_path / "s.h5"
+    run_study(F, F.problem(), 64, out=out, workers=1, progress=False)
+    with h5py.File(out, "r+") as f:
+        if damage == "definition":
+            f.attrs["definition"] = "{bad json"
+        elif damage == "status":
+            del f["status"]
+        else:
+            f.create_group("failures")  # the group without its row and message datasets
+    with pytest.raises(InputError, match="is a damaged study file"):
+        run_study(F, F.problem(), 64, out=out, resume=True, workers=1, progress=False)
+
+
 def test_failures_survive_in_the_store(tmp_path):
     out = tmp_path / "s.h5"
 
@@ -229,6 +246,14 @@ def test_target_width_stops_early():
     widths = 2 * np.r_[res.analysis["S1_conf_replicates"], res.analysis["ST_conf_replicates"]]
     assert res.n < 4096 and widths.max() < 0.2
     assert res.evaluations == res.n * 5
+    assert res.to_json()["target_width"] == {"target": 0.2, "widest": pytest.approx(widths.max()), "reached": True}
+
+
+def test_a_target_width_not_reached_says_so_in_the_result():
+    """It had been said on stderr only, beside checks that all passed."""
+    res = run_study(F, F.problem(), 64, workers=1, progress=False, target_width=1e-4, log=lambda line: None)
+    widths = 2 * np.r_[res.analysis["S1_conf_replicates"], res.analysis["ST_conf_replicates"]]
+    assert res.to_json()["target_width"] == {"target": 1e-4, "widest": pytest.approx(widths.max()), "reached": False}
 
 
 # --------------------------------------------------------------------------- in-process resume

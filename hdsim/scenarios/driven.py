@@ -70,8 +70,21 @@ def _check_tables(data: dict, src) -> None:
     efficiency = data.get("efficiency", {})
     _positive(efficiency, "speed_rpm", 2000.0, f"{src}: efficiency")
     _positive(efficiency, "load", 1.0, f"{src}: efficiency")
+    _positive(efficiency, "revolutions", 4.0, f"{src}: efficiency")
     if int(data.get("output", {}).get("samples_per_wg_rev", 64)) < 1:
         raise InputError(f"{src}: output.samples_per_wg_rev must be 1 or more")
+    lin = data.get("linearise", {})
+    if abs(float(lin.get("load", 0.0))) > 5.0:  # the same range as a load
+        raise InputError(f"{src}: linearise.load is a fraction of T_N and must be within ±5")
+    _positive(lin, "f_min_Hz", 1.0, f"{src}: linearise")
+    compare = float(lin.get("compare_below", 0.8))
+    if not 0.0 < compare <= 1.0:  # a share of the first resonance, below it
+        raise InputError(f"{src}: linearise.compare_below is a share of the first resonance, in (0, 1]; "
+                         f"got {compare:g}")
+    load = data.get("load", {})
+    if load.get("profile") == "opposing" and float(load.get("torque", 0.0)) < 0.0:
+        raise InputError(f"{src}: an opposing load's torque is its size, a fraction of T_N > 0 (its sign "
+                         f"follows the motion); got {float(load['torque']):g}")
 
 
 def _refuse_contradictions(ctl: dict, position_loop: bool, src) -> None:

@@ -123,10 +123,15 @@ class H5Store(MemoryStore):
         if attrs.get("format") != FORMAT:
             self.file.close()
             raise InputError(f"{self.path} is not an hdsim Sobol study file")
-        self.definition = json.loads(attrs["definition"])
-        self.n = int(attrs["n"])
-        self.data = {name: self.file[name] for name in ("X", "Y", "key", "status")}
-        self.messages = _read_messages(self.file)
+        try:
+            self.definition = json.loads(attrs["definition"])
+            self.n = int(attrs["n"])
+            self.data = {name: self.file[name] for name in ("X", "Y", "key", "status")}
+            self.messages = _read_messages(self.file)
+        except (KeyError, ValueError, TypeError) as exc:  # a file edited or cut by hand: the input, not the program
+            self.file.close()
+            raise InputError(f"{self.path} is a damaged study file ({type(exc).__name__}: {exc}); "
+                             "start the study again with another --out") from None
 
     def save_failures(self) -> None:
         """Write failure messages if they changed (quiet point: no chunk in flight)."""

@@ -179,11 +179,13 @@ def run_study(func, problem, n, *, seed=0, second_order=False, replicates=4, exe
         checks["ok"] = checks["ok"] and not flags
     for line in failed_messages(checks):
         log(line)
+    extra = {"conf_level": conf_level, "seed": int(seed), "reused": int(before["done"] + before["failed"])}
+    if target_width is not None:  # whether N sufficed is part of the result, not only of the log
+        extra["target_width"] = {"target": float(target_width), "widest": float(width),
+                                 "reached": bool(width < target_width)}
     return StudyResult(problem, n_stage, bool(second_order), int(replicates), res, checks,
                        conv, failures, counts["done"] + counts["failed"], evaluated_now,
-                       time.perf_counter() - t0, str(out) if out else None,
-                       {"conf_level": conf_level, "seed": int(seed),
-                        "reused": int(before["done"] + before["failed"])})
+                       time.perf_counter() - t0, str(out) if out else None, extra)
 
 
 def _stages(n, replicates, target_width):
