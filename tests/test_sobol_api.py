@@ -129,3 +129,17 @@ def test_a_study_left_with_too_few_blocks_says_its_failures_before_the_refusal()
     with pytest.raises(InputError, match="see the failures above"):
         run_study(_fails_above_a_quarter, problem, 16, workers=1, log=said.append)
     assert any("failed: RuntimeError: too big" in line for line in said)
+
+
+def test_a_study_resumed_with_its_default_scenario_named_is_the_same_study(tmp_path):
+    """Started without a scenario and resumed with the built-in one it ran named, the study was
+    refused as another (the same fingerprint, 'scenario' null against 'lost_motion')."""
+    out = tmp_path / "s.h5"
+    first = hdsim.sobol("CSG-25-100", ["h_pz"], "lost_motion_arcmin", range=0.1, n=16, out=out, workers=1)
+    again = hdsim.sobol("CSG-25-100", ["h_pz"], "lost_motion_arcmin", range=0.1, n=16, out=out, resume=True,
+                        scenario="lost_motion", workers=1)
+    assert again.evaluated_now == 0 and list(again.analysis["ST"]) == list(first.analysis["ST"])
+    changed = hdsim.load_scenario("lost_motion").with_updates({"load.rate": 0.08})
+    with pytest.raises(InputError, match="different study"):
+        hdsim.sobol("CSG-25-100", ["h_pz"], "lost_motion_arcmin", range=0.1, n=16, out=out, resume=True,
+                    scenario=changed, workers=1)

@@ -64,10 +64,21 @@ def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, 
     by_name = isinstance(unit, str) and "drive_file" not in drive.provenance
     func = batch.model_function(unit if by_name else drive, list(names), output, scenario, evaluator)
     model = {"unit": drive.name, "output": output,
-             "scenario": None if scenario is None else func.scenario.name,
+             "scenario": None if _is_default_scenario(batch, output, scenario, func.scenario) else func.scenario.name,
              "fingerprint": batch.drive_fingerprint(drive, func.scenario, func.evaluator),
              "evaluator": func.evaluator}
     return func, problem, output, model, None
+
+
+def _is_default_scenario(batch, output: str, given, resolved) -> bool:
+    """Whether the study runs the built-in scenario of ``output``, named or not: a study
+    started without ``scenario`` and resumed with its default named was refused as another."""
+    if given is None:
+        return True
+    from hdsim.scenarios.scenario import load_scenario
+
+    default = batch.METRIC_SCENARIOS.get(output)
+    return default is not None and load_scenario(default).data == resolved.data
 
 
 def _refuse_unbuildable_ends(drive, problem, dotted: list) -> None:
