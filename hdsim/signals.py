@@ -21,9 +21,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["NOISE_WINDOW", "RATE_STEP", "EVEN_SAMPLING", "local_cubic_weights", "noise_level", "evenly_sampled",
-           "smoothed", "turning_points", "torque_legs", "loading_direction", "loading_rates", "leg_loading", "rate_groups", "Breakaway",
-           "angle_resolution", "breakaway_episodes", "glitches", "GLITCH_FACTOR"]
+__all__ = ["NOISE_WINDOW", "RATE_STEP", "EVEN_SAMPLING", "GLITCH_FACTOR", "local_cubic_weights", "noise_level",
+           "evenly_sampled", "smoothed", "turning_points", "torque_legs", "loading_direction", "loading_rates",
+           "leg_loading", "rate_groups", "Breakaway", "angle_resolution", "breakaway_episodes", "glitches"]
 
 #: samples of the local cubic fit that the noise estimate subtracts
 NOISE_WINDOW = 7

@@ -133,12 +133,16 @@ def _figures(setup: str) -> dict:
     return figures[setup]
 
 
+def _figure_name(scenario: Scenario, kind: str) -> str:
+    return f"{scenario.name}_{kind}.png"
+
+
 def output_names(scenario: Scenario, figures: bool = True) -> list[str]:
     """The names of the files `write_outputs` may write for a run of ``scenario`` (checked
     before the run: none of them may be a folder)."""
     names = [f"{scenario.name}.h5"]
     if figures:
-        names += [f"{scenario.name}_{kind}.png" for kind in _figures(scenario.setup)]
+        names += [_figure_name(scenario, kind) for kind in _figures(scenario.setup)]
     return names
 
 
@@ -174,7 +178,7 @@ def write_outputs(run, out_dir: Path, figures: bool = True) -> dict[str, str]:
                 figure = draw(run)
                 if figure is None:  # a figure this run has nothing for (a sweep's, on another profile)
                     continue
-                path = out_dir / f"{run.scenario.name}_{kind}.png"
+                path = out_dir / _figure_name(run.scenario, kind)
                 save_figure(figure, path)
                 paths[f"{kind}_figure"] = str(path)
     return paths

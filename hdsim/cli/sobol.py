@@ -82,12 +82,9 @@ def run(args) -> int:
     # where the results go is checked before the study, not after its first chunk
     if args.out:
         check_output_file(args.out, "--out")
-    if args.report:
-        check_output_folder(args.report, "--report", names=_REPORT_FILES)
-    elif args.out:  # the summary and the figures go beside the study file
-        stem = Path(args.out).stem
-        check_output_folder(Path(args.out).parent, "--out", names=tuple(name.replace("sobol", stem, 1)
-                                                                         for name in _REPORT_FILES))
+    where = _summary_folder(args)
+    if where is not None:  # the summary and the figures, into --report or beside the study file
+        check_output_folder(where[0], "--report" if args.report else "--out", names=_summary_files(where[1]))
     # a broken model is ModelError (bad input, exit 2); anything else that fails here, a
     # broken process pool included, is the program's failure and reaches main (exit 1)
     func, problem, output, model, analytic = _resolve(args, models)
@@ -188,30 +185,39 @@ def _extras(args, model, analytic, names, result) -> dict:
     return extra
 
 
-#: what ``--report DIR`` holds (`_write_outputs`; beside ``--out`` the stem is the study file's):
-#: checked before the study
-_REPORT_FILES = ("sobol.json", "sobol_indices.png", "sobol_convergence.png")
+def _summary_folder(args) -> tuple[Path, str] | None:
+    """(folder, stem) of the JSON summary and the figures: ``--report DIR`` as ``sobol``, else
+    beside ``--out`` under the study file's stem; None without either."""
+    if args.report:
+        return Path(args.report), "sobol"
+    if args.out:
+        return Path(args.out).parent, Path(args.out).stem
+    return None
+
+
+def _summary_files(stem: str) -> tuple[str, str, str]:
+    """The summary's and the figures' file names (checked before the study, written after it)."""
+    return f"{stem}.json", f"{stem}_indices.png", f"{stem}_convergence.png"
 
 
 def _write_outputs(args, summary, result, analytic, target) -> None:
     """Figures and the JSON summary: into ``--report DIR`` or next to ``--out``."""
-    if args.report:
-        folder, stem = Path(args.report), "sobol"
-    elif args.out:
-        folder, stem = Path(args.out).parent, Path(args.out).stem
-    else:
+    where = _summary_folder(args)
+    if where is None:
         return
+    folder, stem = where
+    summary_name, indices_name, convergence_name = _summary_files(stem)
     from hdsim.atomic import write_text_atomic
     from hdsim.plotting.sensitivity import plot_convergence, plot_indices
 
     names = list(result.problem.names)
-    figs = [plot_indices(folder / f"{stem}_indices.png", names, result.analysis, analytic,
+    figs = [plot_indices(folder / indices_name, names, result.analysis, analytic,
                          title=f"{summary['output']}: N = {result.n}")]
     if len(result.convergence) > 1:
-        figs.append(plot_convergence(folder / f"{stem}_convergence.png", names,
+        figs.append(plot_convergence(folder / convergence_name, names,
                                      result.convergence, target, analytic))
     summary["figures"] = [str(f) for f in figs]
-    write_text_atomic(folder / f"{stem}.json", json.dumps(summary, indent=1, allow_nan=False))
+    write_text_atomic(folder / summary_name, json.dumps(summary, indent=1, allow_nan=False))
 
 
 def _print_table(s) -> None:
