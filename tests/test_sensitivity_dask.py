@@ -129,3 +129,19 @@ def test_study_survives_a_killed_dask_worker():
                                   dashboard_address=None) as cluster, distributed.Client(cluster) as client:
         pids = list(client.run(os.getpid).values())
         _study_losing_a_worker(client, lambda: os.kill(pids[0], signal.SIGKILL))
+
+
+def test_a_scheduler_without_workers_is_refused_after_a_wait_not_waited_on_for_ever(monkeypatch, capsys):
+    distributed = _distributed()
+    import sys
+
+    # the module, not the package's function of the same name
+    monkeypatch.setattr(sys.modules["hdsim.sensitivity.evaluate"], "DASK_WORKER_WAIT_S", 0.5)
+    with distributed.LocalCluster(n_workers=0, processes=False, protocol="tcp", dashboard_address=None) as empty:
+        address = empty.scheduler_address.removeprefix("tcp://")
+        code = main(["sobol", "--function", "ishigami", "--n", "64", "--executor", f"dask://{address}"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "has no worker yet; waiting up to 0.5 s" in err
+    assert err.strip().splitlines()[-1].endswith(
+        "has no worker after 0.5 s: start one (dask worker ADDRESS) or check that they reach this scheduler")

@@ -220,9 +220,30 @@ def open_executor(spec: str | None = "local", workers: int = 2):
     except (OSError, TimeoutError) as exc:
         raise InputError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
     try:
+        _wait_for_a_worker(client, address)
         yield client.get_executor(pure=False)
     finally:
         client.close()
+
+
+#: how long a study waits for the first worker of a Dask scheduler that has none [s]: a
+#: batch system may start workers a little after the scheduler, but a scheduler without
+#: any would otherwise hold the study silently for ever
+DASK_WORKER_WAIT_S = 60.0
+
+
+def _wait_for_a_worker(client, address: str) -> None:
+    """Return once the scheduler has a worker; say that the study waits, and give up (InputError)
+    after `DASK_WORKER_WAIT_S`."""
+    if client.scheduler_info().get("workers"):
+        return
+    print(f"hdsim: the Dask scheduler at {address} has no worker yet; waiting up to "
+          f"{DASK_WORKER_WAIT_S:g} s for one", file=sys.stderr)
+    try:
+        client.wait_for_workers(1, timeout=DASK_WORKER_WAIT_S)
+    except TimeoutError:
+        raise InputError(f"the Dask scheduler at {address} has no worker after {DASK_WORKER_WAIT_S:g} s: "
+                         "start one (dask worker ADDRESS) or check that they reach this scheduler") from None
 
 
 def evaluate(func, X, executor=None, *, workers=2, chunksize=None, rows=None,
