@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import glob
 import io
 import os
 import tempfile
@@ -61,7 +62,8 @@ def atomic_path(target: str | os.PathLike):
     """
     target = Path(target)
     target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    _remove_orphans(target)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.{os.getpid()}.", suffix=".tmp", dir=target.parent)
     os.close(fd)
     # mkstemp creates 0600; give the result the mode an ordinary file would get
     umask = os.umask(0)
@@ -81,6 +83,31 @@ def atomic_path(target: str | os.PathLike):
             # a write that failed (a full disk) names no file: the message names the result's
             raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from exc
         raise
+
+
+def _remove_orphans(target: Path) -> None:
+    """Remove temporary files of ``target`` left by a process of this machine that is gone.
+
+    A process killed outright (SIGKILL, the OOM killer) cannot remove its temporary file,
+    and a study's can be as large as the study. The writer's pid is in the name; a file
+    whose writer still runs, or whose name holds none, is left alone. (The pid is this
+    machine's: two machines writing one result into a shared folder race anyway.)
+    """
+    for orphan in target.parent.glob(f".{glob.escape(target.name)}.*.tmp"):
+        pid = orphan.name[len(target.name) + 2:].split(".", 1)[0]
+        if pid.isdigit() and not _running(int(pid)):
+            with contextlib.suppress(OSError):
+                orphan.unlink()
+
+
+def _running(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # another user's process: it runs
+        return True
+    return True
 
 
 def write_text_atomic(target: str | os.PathLike, text: str) -> None:
