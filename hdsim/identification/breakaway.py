@@ -36,8 +36,8 @@ import numpy as np
 
 from hdsim.errors import InputError, unknown_name
 from hdsim.identification.running_diagnosis import RunningSession, RunningTorqueTest
-from hdsim.identification.running_fit import TorqueFit
-from hdsim.identification.test_kinds import register_test_kind
+from hdsim.identification.running_fit import TorqueFit, bounded_lsq
+from hdsim.identification.test_kinds import TestKind, register_test_kind
 from hdsim.io.data_checks import Check, slipping_starts
 from hdsim.io.running_checks import speed_and_acceleration
 from hdsim.model.family import FamilyKnowledge
@@ -138,11 +138,8 @@ class BreakawayFit(TorqueFit):
     n_params: int = 0
 
     def metrics(self) -> dict:
-        starting = self.record.starting_torques()
-        return {"starting_torque_forward_Nm": starting["forward"],
-                "starting_torque_forward_uncertainty_Nm": starting["forward_uncertainty"],
-                "starting_torque_reverse_Nm": starting["reverse"],
-                "starting_torque_reverse_uncertainty_Nm": starting["reverse_uncertainty"]}
+        # starting_torque_forward_Nm, …_forward_uncertainty_Nm, …_reverse_Nm, …_reverse_uncertainty_Nm
+        return {f"starting_torque_{k}_Nm": v for k, v in self.record.starting_torques().items()}
 
     @property
     def drive(self):
@@ -214,8 +211,6 @@ def fit_breakaway(record, families=(), rows=None) -> BreakawayFit:
     InputError
         No start from rest, an unknown family, or too few rows to fit.
     """
-    from scipy.optimize import lsq_linear  # imported here: only a breakaway fit needs it
-
     rec = BreakawayRecord.of(record)
     families = list(families)
     for f in families:
@@ -230,10 +225,7 @@ def fit_breakaway(record, families=(), rows=None) -> BreakawayFit:
         names, A, lower = _columns(rec, families, ws)
         if np.count_nonzero(use) <= A.shape[1] + 1:
             raise InputError(f"{np.count_nonzero(use)} moving rows: too few to fit {A.shape[1]} parameters")
-        scale = np.sqrt(np.sum(A[use] ** 2, axis=0))
-        scale[scale == 0] = 1.0
-        sol = lsq_linear(A[use] / scale, rec.torque[use], bounds=(lower * scale, np.inf), method="bvls")
-        x = sol.x / scale
+        x = bounded_lsq(A[use], rec.torque[use], lower, np.inf)
         r = rec.torque[use] - A[use] @ x
         if best is None or float(r @ r) < best[0]:
             best = (float(r @ r), ws, names, A, x)
@@ -256,23 +248,21 @@ def breakaway_checks(meas, scale) -> tuple[list, dict]:
     against the catalog's starting torque."""
     rec = BreakawayRecord.of(meas)
     side = abs(rec.side_factor)
-    checks = []
     output_torque = np.asarray(meas.torque, dtype=float) * (1.0 if meas.torque_side == "output" else meas.ratio)
     # rests that held nothing, or ended in an elastic twist, are a locked drive's: no start
     starts = rec.starts if scale is None or slipping_starts(meas.time, meas.angle, output_torque, scale) else []
     if not starts:
-        checks.append(Check("broke_away", "fail", "the shaft never started from rest (no rest that held the "
-                            "torque followed by a turn beyond the drive's elastic twist): this is not a "
-                            "breakaway test"))
-        return checks, {"starts": 0}
+        never = Check("broke_away", "fail", "the shaft never started from rest (no rest that held the torque "
+                      "followed by a turn beyond the drive's elastic twist): this is not a breakaway test")
+        return [never], {"starts": 0}
     where = ", ".join(f"{'forward' if s.direction > 0 else 'reverse'} at {float(meas.time[s.onset]):.3g} s, "
                       f"{abs(s.torque) * side:.3g} N·m" for s in starts[:6])
-    checks.append(Check("broke_away", "ok", f"{len(starts)} start(s) from rest: {where}"))
+    checks = [Check("broke_away", "ok", f"{len(starts)} start(s) from rest: {where}")]
     ways = {s.direction for s in starts}
     if len(ways) < 2:
         checks.append(Check("both_directions", "warn", "the shaft started one way only: the other direction's "
                             "starting torque, and any asymmetry, cannot be told"))
-    catalog = getattr(scale, "starting_torque", 0.0) if scale is not None else 0.0
+    catalog = getattr(scale, "starting_torque", 0.0)
     if catalog:
         mine = rec.starting_torques()
         seen = [v for k, v in mine.items() if v is not None and not k.endswith("uncertainty")]
@@ -307,7 +297,7 @@ class BreakawayTest(RunningTorqueTest):
 
     def fit_summary(self, result, stem, scale) -> dict:
         summary = result.summary()
-        catalog = getattr(scale, "starting_torque", 0.0) if scale is not None else 0.0
+        catalog = getattr(scale, "starting_torque", 0.0)
         summary["metrics"]["catalog_starting_torque_Nm"] = catalog * abs(result.record.side_factor) or None
         return summary
 
@@ -317,10 +307,6 @@ class BreakawayTest(RunningTorqueTest):
     def fit_json(self, fit) -> dict:
         return {"fitted": fit.fitted, "uncertainty": fit.uncertainty}
 
-    def diagnosis_json(self, diagnosis) -> dict:
-        summary = diagnosis.final.fit.summary()
-        return {"metrics": summary["metrics"], "noise_floor_Nm": summary["noise_floor_Nm"]}
-
     def checks(self, meas, scale):
         return breakaway_checks(meas, scale)
 
@@ -328,10 +314,8 @@ class BreakawayTest(RunningTorqueTest):
         return []
 
     def limits(self, diagnosis_json, data, ranking):
-        out = []
-        if data.get("directions", 2) < 2:
-            out.append("starts in the other direction: an asymmetry needs both")
-        return out + [p["measurement"] for p in diagnosis_json.get("ambiguous", []) if p.get("measurement")]
+        out = ["starts in the other direction: an asymmetry needs both"] if data.get("directions", 2) < 2 else []
+        return out + TestKind.limits(self, diagnosis_json, data, ranking)  # and the ties' measurements
 
     def unexplained(self) -> str:
         return ("the torque after breakaway keeps a structure no breakaway family explains: look at the residual "
@@ -366,30 +350,23 @@ class BreakawaySession(RunningSession):
 
     @staticmethod
     def folds_of(record):
-        return _blocks(record)
+        """Two folds of alternate blocks of moving rows, each half the static rows long: each
+        fold holds static rows and rows at speed of every start (a fold of whole starts, or of
+        halves, would leave one fold without the static level and nothing to predict it by)."""
+        rows = np.flatnonzero(record.moving)
+        t = np.asarray(record.measurement.time, dtype=float)
+        block = max(int(0.5 * VERGE_S / float(np.median(np.diff(t)))), 2)
+        first = np.zeros(record.moving.size, dtype=bool)
+        first[rows[(np.arange(rows.size) // block) % 2 == 0]] = True
+        second = record.moving & ~first
+        return [first, second], [second, first]
 
     def fit_model(self, ids, rows=None, widened=()):
         by_id = {v: k for k, v in FAMILY_IDS.items()}
         return fit_breakaway(self.record, [by_id.get(i, i) for i in ids], rows=rows)
 
-    def family_id(self, family: str) -> str:
-        return FAMILY_IDS[family]
-
-    def forms(self, family: str) -> tuple:
+    def entry_forms(self, family: str) -> tuple:
         return (FAMILY_IDS[family],)
-
-
-def _blocks(rec: BreakawayRecord) -> tuple[list, list]:
-    """Two folds of alternate blocks of moving rows, each half the static rows long: each
-    fold holds static rows and rows at speed of every start (a fold of whole starts, or of
-    halves, would leave one fold without the static level and nothing to predict it by)."""
-    rows = np.flatnonzero(rec.moving)
-    t = np.asarray(rec.measurement.time, dtype=float)
-    block = max(int(0.5 * VERGE_S / float(np.median(np.diff(t)))), 2)
-    first = np.zeros(rec.moving.size, dtype=bool)
-    first[rows[(np.arange(rows.size) // block) % 2 == 0]] = True
-    second = rec.moving & ~first
-    return [first, second], [second, first]
 
 
 register_test_kind(BreakawayTest())

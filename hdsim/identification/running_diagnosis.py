@@ -179,7 +179,7 @@ class RunningSession:
     (`hdsim.identification.running_fit.fit_running`).
 
     A kind whose model is fitted the same way (a least-squares torque law on the rows a
-    record moves) derives from it and gives its own `fit_model`, `family_id`, record and
+    record moves) derives from it and gives its own `fit_model`, `entry_forms`, record and
     folds (`hdsim.identification.breakaway`)."""
 
     one_rate = False
@@ -201,17 +201,22 @@ class RunningSession:
 
     @staticmethod
     def folds_of(record) -> tuple[list, list]:
-        """(training rows, held-out rows) of the two hold-out folds."""
-        return _halves(record)
+        """(training rows, held-out rows) of the two hold-out folds: the first and the second
+        half of every plateau; ramps train both, test neither."""
+        first = np.zeros(record.speed.size, dtype=bool)
+        second = np.zeros_like(first)
+        for s in record.segments:
+            mid = (s.start + s.stop) // 2
+            first[s.start:mid] = True
+            second[mid:s.stop] = True
+        ramps = ~(first | second)
+        return [first | ramps, second | ramps], [second, first]
 
     def fit_model(self, families, rows=None, widened=()):
         """The law with ``families`` fitted on ``rows`` (default every moving row)."""
         return fit_running(self.record, families, rows=rows, widened=widened)
 
-    def family_id(self, family: str) -> str:
-        return RUNNING_FAMILIES[family].id
-
-    def forms(self, family: str) -> tuple:
+    def entry_forms(self, family: str) -> tuple:
         """The ids of the forms of ``family`` a candidate enters in (the best passing one stands
         for the family). A sweep in one direction cannot tell the ripple's forms apart (a
         torque that reverses with the motion and one that does not are the same there): it
@@ -228,9 +233,6 @@ class RunningSession:
     def baseline(self) -> Step:
         ids = list(self.chosen.values())
         return Step(list(self.chosen), self.fit_model(ids), self._holdout_rss(ids))
-
-    def entry_forms(self, family: str) -> tuple:
-        return self.forms(family)
 
     def other_forms(self, current, done) -> list:
         return []  # the families' other shapes enter the acceptance rule instead (its proxy test)
@@ -335,18 +337,6 @@ def _explained(fit, floor: float) -> dict:
     return {"ljung_box_q": w["ljung_box_q"], "p_value": w["p_value"], "white": bool(white),
             "noise_floor_Nm": floor, "rmse_Nm": rms, "rms_over_noise": ratio,
             "explained": bool(white or ratio <= EXPLAINED_RATIO)}
-
-
-def _halves(rec: SweepRecord) -> tuple[list, list]:
-    """Two folds: the first and the second half of every plateau; ramps train both, test neither."""
-    first = np.zeros(rec.speed.size, dtype=bool)
-    second = np.zeros_like(first)
-    for s in rec.segments:
-        mid = (s.start + s.stop) // 2
-        first[s.start:mid] = True
-        second[mid:s.stop] = True
-    ramps = ~(first | second)
-    return [first | ramps, second | ramps], [second, first]
 
 
 def _gains(held, before) -> list[float]:

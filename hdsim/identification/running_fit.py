@@ -26,6 +26,7 @@ fits worse than the model without it.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -372,7 +373,9 @@ def _design(rec: SweepRecord, terms: list[RunningTerm], nonlinear: dict, widened
     return owners, names, np.hstack(cols), np.array(lower), np.array(upper)
 
 
-def _solve(A, y, lower, upper):
+def bounded_lsq(A, y, lower, upper) -> np.ndarray:
+    """The bounded least-squares solution of ``A x = y`` (BVLS on the columns scaled to unit
+    norm); round-off may leave it a hair past a bound (a sweep's and a breakaway's fit)."""
     # imported here: scipy.optimize costs about 0.2 s, which a command on a locked record
     # would pay only to register the running-torque kind
     from scipy.optimize import lsq_linear
@@ -380,7 +383,7 @@ def _solve(A, y, lower, upper):
     scale = np.sqrt(np.sum(A * A, axis=0))
     scale[scale == 0] = 1.0
     sol = lsq_linear(A / scale, y, bounds=(lower * scale, upper * scale), method="bvls")
-    return np.clip(sol.x / scale, lower, upper)  # round-off may step a hair past a bound
+    return sol.x / scale
 
 
 def fit_running(record, families=(), rows=None, widened=()) -> RunningFit:
@@ -413,7 +416,7 @@ def fit_running(record, families=(), rows=None, widened=()) -> RunningFit:
         raise InputError(f"{rec.measurement.source}: fewer than 10 rows at a steady running speed to fit")
     y = rec.torque
     grids = {t.family: t.grid(rec.plateau_speeds) for t in terms if t.grid(rec.plateau_speeds)}
-    choices = [dict(zip(grids, values)) for values in _product(list(grids.values()))]
+    choices = [dict(zip(grids, values)) for values in itertools.product(*grids.values())]
     best = None
     for nonlinear in choices:
         owners, names, A, lo, hi = _design(rec, terms, nonlinear, tuple(widened))
@@ -433,13 +436,15 @@ def fit_running(record, families=(), rows=None, widened=()) -> RunningFit:
     residual = np.asarray(rec.measurement.torque, dtype=float) - prediction
     _check_law_holds(residual[use] / side, rss, y[use])
     n_params = len(names) + len(grids)
-    fitted = {f"{_owner_name(o)}.{n}": float(v) for o, n, v in zip(owners, names, x)}
+    keys = [f"{SHAPE if o is SHAPE else o.family}.{n}" for o, n in zip(owners, names)]  # ``family.name``
+    fitted = {k: float(v) for k, v in zip(keys, x)}
     fitted.update({f"{f}.stribeck_speed": float(v) for f, v in nonlinear.items()})
     cov = _covariance(A[use], y[use] - A[use] @ x)
+    sd = [] if cov is None else np.sqrt(np.maximum(np.diag(cov), 0.0))  # 1-σ of each amplitude
     coordinates = None if cov is None else SweepCoordinates(tuple(terms), tuple(owners), tuple(names),
                                                             dict(nonlinear), rec.velocity_scale, x.copy(), cov)
     return RunningFit(rec, families, law, inertia, prediction, residual, use, n_params, fitted,
-                      _uncertainty(cov, owners, names), {t.family: t.id for t in terms[1:]}, coordinates)
+                      {k: float(s) for k, s in zip(keys, sd)}, {t.family: t.id for t in terms[1:]}, coordinates)
 
 
 def _law_of(velocity_scale: float, terms, owners, names, x: np.ndarray, nonlinear: dict):
@@ -464,7 +469,7 @@ def _held_solution(rec, terms, owners, names, A, y, lower, upper, nonlinear) -> 
     family just added neutral, that is the solution of the model it contains, so a larger
     model never fits worse. The base always holds, so the recursion ends.
     """
-    x = _solve(A, y, lower, upper)
+    x = np.clip(bounded_lsq(A, y, lower, upper), lower, upper)  # round-off may step a hair past a bound
     if _law_of(rec.velocity_scale, terms, owners, names, x, nonlinear) is not None:
         return x
     best = None
@@ -489,13 +494,6 @@ def _check_law_holds(residual: np.ndarray, rss: float, y: np.ndarray) -> None:
                            f"the fitted amplitudes {rss:.9g}: a term did not hold its amplitudes")
 
 
-def _product(grids: list) -> list:
-    out = [()]
-    for grid in grids:
-        out = [(*head, v) for head in out for v in grid]
-    return out
-
-
 def _covariance(A, r) -> np.ndarray | None:
     """Covariance of the amplitudes, (AᵀA)⁻¹ s² widened by n/n_eff for a correlated residual."""
     n, k = A.shape
@@ -504,14 +502,6 @@ def _covariance(A, r) -> np.ndarray | None:
         return np.linalg.pinv(A.T @ A) * s2 * (n / effective_n(r))
     except np.linalg.LinAlgError:
         return None
-
-
-def _uncertainty(cov, owners, names) -> dict:
-    """1-σ of each amplitude by ``family.name``."""
-    if cov is None:
-        return {}
-    sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
-    return {f"{_owner_name(o)}.{name}": float(s) for o, name, s in zip(owners, names, sd)}
 
 
 @dataclass(frozen=True)
@@ -531,10 +521,6 @@ class SweepCoordinates:
     def law(self, x) -> InputFriction | None:
         """The law with amplitudes ``x``; None where a term cannot hold them."""
         return _law_of(self.velocity_scale, self.terms, self.owners, self.names, x, self.nonlinear)
-
-
-def _owner_name(owner) -> str:
-    return "shape" if owner is SHAPE else owner.family
 
 
 def running_plausibility(fit: RunningFit, drive) -> list[dict]:
