@@ -217,24 +217,23 @@ def fit_breakaway(record, families=(), rows=None) -> BreakawayFit:
         if f not in FAMILIES:
             raise InputError(f"a breakaway test cannot show the {f} family; it shows {', '.join(FAMILIES)}")
     use = rec.moving if rows is None else rec.moving & np.asarray(rows, dtype=bool)
+    n = int(np.count_nonzero(use))
     if not rec.starts:
         raise InputError("the shaft never started from rest: there is no breakaway to fit")
     grid = STRIBECK_GRID if "friction" in families else STRIBECK_GRID[:1]
     best = None
     for ws in grid:
         names, A, lower = _columns(rec, families, ws)
-        if np.count_nonzero(use) <= A.shape[1] + 1:
-            raise InputError(f"{np.count_nonzero(use)} moving rows: too few to fit {A.shape[1]} parameters")
+        if n <= A.shape[1] + 1:
+            raise InputError(f"{n} moving rows: too few to fit {A.shape[1]} parameters")
         x = bounded_lsq(A[use], rec.torque[use], lower, np.inf)
         r = rec.torque[use] - A[use] @ x
         if best is None or float(r @ r) < best[0]:
             best = (float(r @ r), ws, names, A, x)
-    _, ws, names, A, x = best
+    rss, ws, names, A, x = best
     side = abs(rec.side_factor)
     residual = (rec.torque - A @ x) * side
-    n = int(np.count_nonzero(use))
-    sigma2 = best[0] / max(n - len(names), 1)
-    cov = sigma2 * np.linalg.pinv(A[use].T @ A[use])
+    cov = rss / max(n - len(names), 1) * np.linalg.pinv(A[use].T @ A[use])
     units = {"level": side, "asymmetry.reverse_excess": side, "friction.stribeck_drop": side}
     fitted = {k: float(v) * units.get(k, 1.0) for k, v in zip(names, x)}
     uncertainty = {k: float(math.sqrt(max(cov[i, i], 0.0))) * units.get(k, 1.0) for i, k in enumerate(names)}

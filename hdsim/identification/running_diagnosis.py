@@ -194,10 +194,8 @@ class RunningSession:
         self.folds = self.folds_of(self.record)
         self.passes = 0
 
-    @staticmethod
-    def record_of(meas):
-        """The kind's record of ``meas`` (speed, plateaus, moving rows)."""
-        return meas if isinstance(meas, SweepRecord) else SweepRecord.of(meas)
+    #: the kind's record of a measurement (speed, plateaus, moving rows)
+    record_of = staticmethod(SweepRecord.of)
 
     @staticmethod
     def folds_of(record) -> tuple[list, list]:

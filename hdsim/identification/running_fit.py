@@ -100,8 +100,11 @@ class SweepRecord:
         return self.cache[key]
 
     @classmethod
-    def of(cls, meas: Measurement) -> "SweepRecord":
-        """The record of a running-torque measurement; InputError if it never turns steadily."""
+    def of(cls, meas: Measurement | SweepRecord) -> "SweepRecord":
+        """The record of a running-torque measurement (a record is its own); InputError if it
+        never turns steadily."""
+        if isinstance(meas, cls):
+            return meas
         if meas.test != "running_torque":
             raise InputError(f"{meas.source}: a {meas.test} test is not a running-torque test")
         ratio = float(meas.ratio) if meas.ratio is not None else 1.0
@@ -407,7 +410,7 @@ def fit_running(record, families=(), rows=None, widened=()) -> RunningFit:
     RunningFit
         The fit; ``prediction`` and ``residual`` cover every row.
     """
-    rec = record if isinstance(record, SweepRecord) else SweepRecord.of(record)
+    rec = SweepRecord.of(record)
     chosen = {running_term(name).family: name for name in families}  # a family, or one of its forms by id
     families = [f for f in RUNNING_FAMILIES if f in chosen]
     terms = [BASE_TERM] + [rec.term(chosen[f]) for f in families]
