@@ -106,6 +106,13 @@ def test_one_angle_and_the_ratio_give_the_other(tmp_path):
     ("# test: running_torque\ntime_s,output_angle_rad,torque_Nm\n", "needs the transmission ratio"),
     ("# test: running_torque\n# ratio: 100\ntime_s,torque_Nm\n", "at least one of them"),
     ("# test: running_torque\n# ratio: 100\n# torque_side: motor\ntime_s,wg_angle_rad,torque_Nm\n", "input or output"),
+    # both angles but the torque on the output: without the ratio it would be fitted as the
+    # input's, a hundred times too large (it was, silently)
+    ("# test: running_torque\n# torque_side: output\ntime_s,wg_angle_rad,output_angle_rad,torque_Nm\n",
+     "with '# torque_side: output' needs the transmission ratio to refer the torque to the input"),
+    # a breakaway's starting torques are given on both shafts (it had failed as an internal error)
+    ("# test: breakaway\ntime_s,wg_angle_rad,output_angle_rad,torque_Nm\n",
+     "a breakaway file needs the transmission ratio to give its starting torques on both shafts"),
 ])
 def test_running_torque_files_are_refused_in_one_line(tmp_path, head, match):
     path = tmp_path / "bad.csv"

@@ -293,7 +293,8 @@ def interpret_meta(
     Raises
     ------
     InputError
-        On a missing or unknown test, a missing ratio (kinematic_error), or a ratio or
+        On a missing or unknown test, a missing ratio (kinematic_error, breakaway, a torque
+        on the output of a running-torque test), or a ratio or
         rated torque that is not a number (zero ratio, rated torque not positive).
     """
     origin = origin or {}
@@ -307,23 +308,36 @@ def interpret_meta(
         hint = f" (did you mean {close[0]}?)" if close else ""
         raise where.fail(f"{origin.get('test', '')}unknown test {quote_cell(test)}{hint}; "
                          f"expected {tests}")
-    ratio = None
-    if "ratio" in meta:
-        ratio = _parse_number(where, "ratio", meta["ratio"], origin.get("ratio", ""),
-                              nonzero=True)
-    elif test == "kinematic_error":
-        raise where.fail("no '# ratio:' key; a kinematic_error file needs the transmission "
-                         "ratio, e.g. '# ratio: 100' (or --ratio 100)")
     side = meta.get("torque_side", "input").strip()
     if test in ONE_OF and side not in TORQUE_SIDES:
         raise where.fail(f"{origin.get('torque_side', '')}'# torque_side:' is {quote_cell(side)}; expected "
                          "input or output (the shaft the running torque is referred to)")
+    ratio = None
+    if "ratio" in meta:
+        ratio = _parse_number(where, "ratio", meta["ratio"], origin.get("ratio", ""),
+                              nonzero=True)
+    elif (why := _why_ratio(test, side)):
+        raise where.fail(f"no '# ratio:' key; a {test} file {why}, e.g. '# ratio: 100' (or --ratio 100)")
     rated = None
     for key in RATED_KEYS:
         if key in meta:
             rated = _parse_number(where, key, meta[key], origin.get(key, ""), positive=True)
             break
     return test, ratio, rated
+
+
+def _why_ratio(test: str, side: str) -> str:
+    """Why a record of ``test`` with its torque on ``side`` needs the ratio ('' when it does not)."""
+    if test == "kinematic_error":
+        return "needs the transmission ratio"
+    if test == "breakaway":
+        # its starting torques are given on both shafts and compared with the catalog's output figure
+        return "needs the transmission ratio to give its starting torques on both shafts"
+    if test in ONE_OF and side == "output":
+        # the law is fitted on the wave-generator shaft: without the ratio an output torque
+        # would be taken for the input's, a hundred times too large
+        return "with '# torque_side: output' needs the transmission ratio to refer the torque to the input"
+    return ""
 
 
 def resolve_columns(
