@@ -52,11 +52,8 @@ RESAMPLES = 1000
 def block_labels(n: int, starts) -> np.ndarray:
     """Block index (0, 1, …) of each of ``n`` rows, blocks starting at the row indices ``starts``."""
     starts = np.unique(np.clip(np.asarray(list(starts), dtype=int), 0, max(n - 1, 0)))
-    labels = np.zeros(n, dtype=int)
-    if starts.size:
-        labels = np.searchsorted(starts, np.arange(n), side="right") - 1
-        labels = np.maximum(labels, 0)
-    return labels
+    # rows before the first start (and every row when there is none) belong to block 0
+    return np.maximum(np.searchsorted(starts, np.arange(n), side="right") - 1, 0)
 
 
 @dataclass(frozen=True)

@@ -185,10 +185,8 @@ class TwistTest(TestKind):
         return {"rmse_rad": fit_result.rmse_rad, "max_abs_error_rad": fit_result.max_abs_rad}
 
     def fit_json(self, fit_result) -> dict:
-        return {"effect_ids": dict(fit_result.effects),
-                "params": {k: float(v) for k, v in fit_result.params.items()},
-                "uncertainty": {k: float(v) for k, v in fit_result.uncertainty.items()},
-                "offset_rad": fit_result.offset}
+        summary = fit_result.summary()
+        return {key: summary[key] for key in ("effect_ids", "params", "uncertainty", "offset_rad")}
 
     def step_figures(self, step) -> dict:
         return {"holdout_rmse_rad": [float(f.rmse(~f.rows)) for f in step.fold_fits]}

@@ -267,14 +267,14 @@ def load_fitted(path) -> HarmonicDrive:
         if not isinstance(value, dict):
             raise InputError(f"{path}: [{table}] must be a table, got {value!r}")
     drive = doc.get("drive")
-    if drive is not None and not isinstance(drive, dict):
-        raise InputError(f"{path}: [drive] must be a table of a drive file's keys, got {drive!r}")
-    if drive is not None:
+    if drive is None:
+        model = load_unit(unit or None)
+    elif isinstance(drive, dict):
         from hdsim.model.drive_file import drive_from_table
 
         model = drive_from_table(drive, str(path))
     else:
-        model = load_unit(unit or None)
+        raise InputError(f"{path}: [drive] must be a table of a drive file's keys, got {drive!r}")
     params = dict(params)
     slots = {}
     for family, effect_id in effects.items():
@@ -296,7 +296,7 @@ def load_fitted(path) -> HarmonicDrive:
                 values[f] = getattr(current, f)
         slots[family] = fx.make_effect(family, effect_id, **values)
     model = model.with_effects(**slots)
-    return model.with_updates({k: v for k, v in params.items()}) if params else model
+    return model.with_updates(params) if params else model
 
 
 # --------------------------------------------------------------------------- results
@@ -329,7 +329,7 @@ def result_of(ev: Evaluator, prob: FitProblem, unit: str = "") -> FitResult:
         model = model.with_effects(kinematic_error=effect)
         updates.update({f"kinematic_error.{k}": v for k, v in linear.items()})
     cov = covariance(prob, r_rows[0])
-    unc = uncertainty(ev, prob, r_rows[0], cov)
+    unc = uncertainty(prob, cov)
     coordinates = fitted_coordinates(prob, cov)
     prediction = ev.y - full[0]
     effects = {f: getattr(model, f).id for f in SLOTS if not getattr(model, f).is_null}
@@ -378,7 +378,7 @@ def fitted_coordinates(prob: FitProblem, cov) -> FittedCoordinates | None:
         return None
     k = prob.u.size
     bare = dataclasses.replace(prob, rows=prob.rows[:0], basis=prob.basis[:0], J=None, r=None, twist_at_u=None,
-                               nested=None, extra={})
+                               nested=None)
     return FittedCoordinates(bare, prob.u.copy(), np.asarray(cov[:k, :k], dtype=float))
 
 
@@ -415,8 +415,7 @@ def fit(meas: Measurement, effects=None, *, unit=None, rows=None, start: dict | 
     model = build_model(unit, chosen, meas)
     ev = Evaluator(meas, max_steps=max_steps)
     # the effects' other start values run in the same lockstep (about free); the lowest cost wins
-    probs = [make_problem(model, meas, ev, rows=rows, start=start)]
-    probs += [make_problem(model, meas, ev, rows=rows, start={**(start or {}), **alt})
-              for alt in other_starts(model, meas)]
+    starts = [start] + [{**(start or {}), **alt} for alt in other_starts(model, meas)]
+    probs = [make_problem(model, meas, ev, rows=rows, start=s) for s in starts]
     fit_many(ev, probs)
     return result_of(ev, min(probs, key=lambda p: p.cost), unit=model.name)

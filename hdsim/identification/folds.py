@@ -37,6 +37,11 @@ def _legs(meas: Measurement):
     return legs, loading_rates(meas.time, smooth, turns)  # one rate per leg (the same b - a > 2 rule)
 
 
+def _wg_travel(meas: Measurement) -> np.ndarray:
+    """Wave-generator travel from the record's start at every row [rad], reversals counted."""
+    return np.concatenate([[0.0], np.cumsum(np.abs(np.diff(np.asarray(meas.wg_angle, dtype=float))))])
+
+
 def _cycles(legs, torque):
     """Legs grouped into cycles: a cycle closes with a rising leg that follows a falling
     one; a leftover (the last ramp back to zero) joins the last cycle."""
@@ -69,9 +74,7 @@ def folds(meas: Measurement) -> tuple[list[np.ndarray], str]:
     if meas.wg_driven:
         # both folds need both load directions (else the twist under load is not
         # identified): alternate blocks of ten wave-generator revolutions
-        wg = np.asarray(meas.wg_angle, dtype=float)
-        travel = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(wg)))])
-        block = (travel // (KE_FOLD_REVOLUTIONS * 2 * np.pi)).astype(int)
+        block = (_wg_travel(meas) // (KE_FOLD_REVOLUTIONS * 2 * np.pi)).astype(int)
         if block.max() >= 3:
             masks = [block % 2 == 0, block % 2 == 1]
             return masks, "alternate blocks of ten wave-generator revolutions"
@@ -84,10 +87,7 @@ def folds(meas: Measurement) -> tuple[list[np.ndarray], str]:
     # hold every rate that has a cycle to spare, however unequal the rates' shares of the
     # record (one slow cycle and ten fast ones), and a drift or a warm-up is shared alike
     T = np.asarray(meas.torque, dtype=float)
-    cycles = []
-    for c in sorted(set(classes.tolist())):
-        own = [leg for leg, k in zip(legs, classes) if k == c]
-        cycles.append(_cycles(own, T))
+    cycles = [_cycles([leg for leg, k in zip(legs, classes) if k == c], T) for c in sorted(set(classes.tolist()))]
     if sum(len(group) for group in cycles) >= 2:
         for group in sorted(cycles, key=len):
             start = int(masks[1].sum() < masks[0].sum())  # the fold with fewer rows first
@@ -108,10 +108,8 @@ def folds(meas: Measurement) -> tuple[list[np.ndarray], str]:
     # rows outside any leg go to the nearer fold in time
     rest = ~(masks[0] | masks[1])
     if np.any(rest):
-        idx = np.flatnonzero(rest)
-        owner0 = np.flatnonzero(masks[0])
-        owner1 = np.flatnonzero(masks[1])
-        for i in idx:
+        owner0, owner1 = np.flatnonzero(masks[0]), np.flatnonzero(masks[1])
+        for i in np.flatnonzero(rest):
             d0 = np.min(np.abs(owner0 - i)) if owner0.size else np.inf
             d1 = np.min(np.abs(owner1 - i)) if owner1.size else np.inf
             masks[int(d1 < d0)][i] = True
@@ -137,8 +135,7 @@ def blocks(meas: Measurement) -> tuple[list[int], str]:
     wave-generator revolutions when that gives ten blocks or more, else single revolutions.
     """
     if meas.wg_driven:
-        wg = np.asarray(meas.wg_angle, dtype=float)
-        travel = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(wg)))]) / (2 * np.pi)
+        travel = _wg_travel(meas) / (2 * np.pi)
         per = 10 if travel[-1] >= 100 else 1
         index = (travel // per).astype(int)
         starts = np.flatnonzero(np.diff(index) > 0) + 1

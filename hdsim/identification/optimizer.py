@@ -70,12 +70,10 @@ def fit_many(ev: Evaluator, problems: list[FitProblem], *, tol: float = 1e-3, lo
     while pending:
         requests = []
         for p in pending:
-            k = p.u.size
             steps = p.fd_steps()
-            trials = np.zeros((0, k))
             if p.J is None:  # first tick: the start and its Jacobian (and the nested start)
-                U = np.vstack([p.u[None, :], p.u[None, :] + np.diag(steps)]) if k else p.u[None, :]
-                kind = "start"
+                trials, kind = None, "start"
+                U = np.vstack([p.u[None, :], p.u[None, :] + np.diag(steps)])
                 if _takes_nested(p, kind):
                     U = np.vstack([U, p.nested.u[None, :]])
             else:  # Jacobian at the current point and trial steps from the previous one
@@ -156,9 +154,9 @@ def _update(p: FitProblem, r_rows: np.ndarray, has_base: int, steps, trials, tol
         if not np.isfinite(p.cost):
             p.done, p.message = True, "failed: the model cannot be evaluated at the start values"
             return
-        p.J = ((r_rows[1:1 + k] - r0) / steps[:, None]).T if k else np.zeros((r0.size, 0))
+        J = ((r_rows[1:1 + k] - r0) / steps[:, None]).T
         # a column the evaluator could not solve carries no slope (a NaN would make every step NaN)
-        p.J = np.where(np.isfinite(p.J), p.J, 0.0)
+        p.J = np.where(np.isfinite(J), J, 0.0)
         if k == 0:
             p.done, p.message = True, "nothing to fit: the linear part is solved exactly"
         elif p.nested is not None and p.nested.kept:
@@ -268,8 +266,7 @@ def covariance(prob: FitProblem, r: np.ndarray) -> np.ndarray | None:
     if prob.J is None:
         return None
     n = r.size
-    ones = np.ones((n, 1))
-    J = np.hstack([prob.J, ones]) if prob.u.size else ones
+    J = np.hstack([prob.J, np.ones((n, 1))])
     s2 = float(r @ r) / max(n - J.shape[1], 1)
     try:
         return np.linalg.pinv(J.T @ J) * s2 * (n / effective_n(r))
@@ -277,15 +274,13 @@ def covariance(prob: FitProblem, r: np.ndarray) -> np.ndarray | None:
         return None
 
 
-def uncertainty(ev: Evaluator, prob: FitProblem, r: np.ndarray, cov: np.ndarray | None = None) -> dict:
-    """1-sigma uncertainties from the Jacobian (offset column included), n_eff-widened
-    (``cov``: `covariance`, when the caller has it already)."""
-    out = {}
-    cov = covariance(prob, r) if cov is None else cov
+def uncertainty(prob: FitProblem, cov: np.ndarray | None) -> dict:
+    """1-sigma uncertainties of the physical parameters and the offset from the covariance
+    of the fitted coordinates (`covariance`: Jacobian with the offset column, n_eff-widened);
+    empty without a covariance."""
     if cov is None:
-        return out
+        return {}
     sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
-    for j, (name, tr) in enumerate(zip(prob.names, prob.transforms)):
-        out[name] = float(abs(tr.dphys_du(prob.u[j])) * sd[j])
+    out = {name: float(abs(tr.dphys_du(u)) * s) for name, tr, u, s in zip(prob.names, prob.transforms, prob.u, sd)}
     out["offset_rad"] = float(sd[-1])
     return out

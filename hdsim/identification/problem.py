@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -96,13 +96,9 @@ def _zero_torque_signatures(meas: Measurement) -> dict:
         on = near & (sign == direction)
         pos, neg = on & (T > 0), on & (T < 0)
         if np.count_nonzero(pos) >= 3 and np.count_nonzero(neg) >= 3:
-            cp = np.polyfit(T[pos], y[pos], 1)
-            cn = np.polyfit(T[neg], y[neg], 1)
-            values[direction] = (cp[1], cn[1])
+            values[direction] = (np.polyfit(T[pos], y[pos], 1)[1], np.polyfit(T[neg], y[neg], 1)[1])
     if len(values) == 2:
-        up_mid = 0.5 * sum(values[+1])
-        down_mid = 0.5 * sum(values[-1])
-        out["loop_width"] = float(max(down_mid - up_mid, 0.0))
+        out["loop_width"] = float(max(0.5 * sum(values[-1]) - 0.5 * sum(values[+1]), 0.0))
         out["step"] = float(max(0.5 * ((values[+1][0] - values[+1][1]) + (values[-1][0] - values[-1][1])), 0.0))
     return out
 
@@ -293,14 +289,11 @@ class Evaluator:
         could not be solved within ``max_iter`` Newton iterations per sample (the optimiser
         treats them as failed trials)."""
         models = [models] if isinstance(models, HarmonicDrive) else list(models)
-        groups = stackable_groups(models)
-        if len(groups) == 1:
-            return locked_twist(models, self.t, self.T, grid=self.grid, on_failure="nan", max_iter=max_iter)
         # models with different effect classes in one slot (a family tried in another
         # form) cannot share a batch: one pass per group, rows put back in order
         first = np.concatenate([[0], np.cumsum([m.batch_size for m in models])])
         out = np.empty((first[-1], self.n))
-        for group in groups:
+        for group in stackable_groups(models):
             part = locked_twist([models[i] for i in group], self.t, self.T, grid=self.grid, on_failure="nan",
                                 max_iter=max_iter)
             rows = np.concatenate([np.arange(first[i], first[i + 1]) for i in group])
@@ -348,7 +341,6 @@ class FitProblem:
     iterations: int = 0
     stalls: int = 0
     message: str = ""
-    extra: dict = field(default_factory=dict)
     #: the twist (n,) at ``u``, kept from the pass that evaluated it (`result_of` reuses it)
     twist_at_u: np.ndarray | None = None
     #: the contained fitted model's optimum, when the start is one (`make_problem`)
@@ -391,17 +383,14 @@ class FitProblem:
         return np.linalg.pinv(self.basis[self.rows])
 
     def fd_steps(self) -> np.ndarray:
-        return 1e-5 * np.maximum(1.0, np.abs(self.u)) if self.u.size else self.u
+        return 1e-5 * np.maximum(1.0, np.abs(self.u))
 
 
 def other_starts(model: HarmonicDrive, meas: Measurement) -> list[dict]:
     """Start values by dotted name worth a fit of their own (`Effect.other_starts`)."""
     context = fit_context(meas, model)
-    out = []
-    for family in SLOTS:
-        for values in getattr(model, family).other_starts(context):
-            out.append({f"{family}.{name}": float(v) for name, v in values.items()})
-    return out
+    return [{f"{family}.{name}": float(v) for name, v in values.items()}
+            for family in SLOTS for values in getattr(model, family).other_starts(context)]
 
 
 def make_problem(model: HarmonicDrive, meas: Measurement, ev: Evaluator, rows=None, start: dict | None = None,

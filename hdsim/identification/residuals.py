@@ -139,11 +139,13 @@ def order_spectrum(angle, r, max_order: float = 8.0, n_orders: int = 800):
     orders = np.linspace(max_order / n_orders, max_order, n_orders)
     amp = np.empty_like(orders)
     for i, k in enumerate(orders):
-        s, c = np.sin(k * angle), np.cos(k * angle)
-        A = np.column_stack([s, c])
-        coef = np.linalg.lstsq(A, r, rcond=None)[0]
-        amp[i] = math.hypot(*coef)
+        amp[i] = math.hypot(*_sine_fit(angle, r, k))
     return orders, amp
+
+
+def _sine_fit(angle, r, k):
+    """``(a, b)`` of the least-squares fit ``a sin(kθ) + b cos(kθ)`` of ``r``."""
+    return np.linalg.lstsq(np.column_stack([np.sin(k * angle), np.cos(k * angle)]), r, rcond=None)[0]
 
 
 def views(meas, residual) -> dict:
@@ -173,6 +175,11 @@ def views(meas, residual) -> dict:
 
 def _band_mean(mask, r):
     return float(np.mean(r[mask])) if np.count_nonzero(mask) >= 3 else float("nan")
+
+
+def _loop_width(rows, direction, r):
+    """Mean residual of the unloading rows of ``rows`` less that of their loading rows."""
+    return _band_mean(rows & (direction < 0), r) - _band_mean(rows & (direction > 0), r)
 
 
 def findings(meas, residual, max_items: int = 5, floor: float | None = None) -> list[str]:
@@ -220,10 +227,8 @@ def findings(meas, residual, max_items: int = 5, floor: float | None = None) -> 
         out.append((abs(step), f"the model misses {arcsec(step)} ({arcmin(step)}) where the torque "
                                f"crosses zero: a step in the residual there points at backlash"))
     # branches
-    up = _band_mean((direction > 0) & (np.abs(T) < 0.5 * Tmax), r)
-    down = _band_mean((direction < 0) & (np.abs(T) < 0.5 * Tmax), r)
-    if np.isfinite(up) and np.isfinite(down):
-        gap = down - up
+    gap = _loop_width(np.abs(T) < 0.5 * Tmax, direction, r)
+    if np.isfinite(gap):
         out.append((abs(gap), f"loading and unloading branches of the residual differ by "
                               f"{arcsec(gap)}: a hysteresis loop the model does not have "
                               f"(friction, or damping if it grows with the loading rate)"))
@@ -236,8 +241,7 @@ def findings(meas, residual, max_items: int = 5, floor: float | None = None) -> 
         split = math.sqrt(groups[0] * groups[-1])
         fast, slow = leg_rate > split, (leg_rate > 0) & (leg_rate < split)
         if np.count_nonzero(fast) > 10 and np.count_nonzero(slow) > 10:
-            w_fast = _band_mean(fast & (direction < 0), r) - _band_mean(fast & (direction > 0), r)
-            w_slow = _band_mean(slow & (direction < 0), r) - _band_mean(slow & (direction > 0), r)
+            w_fast, w_slow = _loop_width(fast, direction, r), _loop_width(slow, direction, r)
             if np.isfinite(w_fast) and np.isfinite(w_slow):
                 diff = w_fast - w_slow
                 out.append((abs(diff), f"the residual loop is {arcsec(diff)} "
@@ -257,8 +261,7 @@ def findings(meas, residual, max_items: int = 5, floor: float | None = None) -> 
         wg = np.asarray(meas.wg_angle, dtype=float)
         for k, label in ((1, "1× wave generator"), (2, "2× wave generator"),
                          (4, "4× wave generator"), (1.0 / ratio, "1× output")):
-            A = np.column_stack([np.sin(k * wg), np.cos(k * wg)])
-            amp = float(np.hypot(*np.linalg.lstsq(A, r - r.mean(), rcond=None)[0]))
+            amp = float(np.hypot(*_sine_fit(wg, r - r.mean(), k)))
             out.append((amp, f"the residual has {arcsec(amp)} at {label} order: periodic in the "
                              f"wave-generator angle (kinematic error)"))
     out.sort(key=lambda item: -item[0])

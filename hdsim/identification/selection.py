@@ -47,8 +47,7 @@ def score_candidate(family: str, effect_id: str, res: list, base,
     """Score ``res`` (the fits on all rows, then on each fold) against the model ``base``
     (a diagnosis step: its ``fit`` and ``fold_fits``) and apply the acceptance rule."""
     fit_all, fold_fits = res[0], res[1:]
-    r = fit_all.residual[fit_all.rows]
-    n_eff = effective_n(r)
+    n_eff = effective_n(fit_all.residual[fit_all.rows])
     dk = fit_all.n_params - base.fit.n_params
     score = n_eff * math.log(max(fit_all.rss, 1e-300) / max(base.fit.rss, 1e-300)) + dk * math.log(n_eff)
     hold, gains = [], []
