@@ -77,6 +77,7 @@ zoo (``validation/zoo_battery.py``): its rates are in the tutorial
 
 from __future__ import annotations
 
+import functools
 from typing import ClassVar
 
 from hdsim.errors import InputError, SolverError
@@ -324,15 +325,11 @@ class TwistSession:
     def _slots(self, model, all_starts: list, fold_starts: list, label: str) -> list[list]:
         """The fits of one model: all rows and each fold, one problem per start (the effects'
         `other_starts` added to every slot); the lowest cost of a slot counts."""
-        meas, ev = self.measurement, self.evaluator
-        alts = other_starts(model, meas)
-        slots = [[make_problem(model, meas, ev, start=s, label=f"{label}:all") for s in all_starts + alts]]
+        alts = other_starts(model, self.measurement)
+        problem = functools.partial(make_problem, model, self.measurement, self.evaluator, max_iter=MAX_ITERATIONS)
+        slots = [[problem(start=s, label=f"{label}:all") for s in all_starts + alts]]
         for i, mask in enumerate(self.masks):
-            slots.append([make_problem(model, meas, ev, rows=mask, start=s, label=f"{label}:fold{i}")
-                          for s in fold_starts[i] + alts])
-        for slot in slots:
-            for p in slot:
-                p.max_iter = MAX_ITERATIONS
+            slots.append([problem(rows=mask, start=s, label=f"{label}:fold{i}") for s in fold_starts[i] + alts])
         return slots
 
     def _results(self, slots: list) -> list:

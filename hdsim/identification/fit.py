@@ -220,17 +220,17 @@ class FitResult(FittedRows):
 
         from hdsim.model.drive_file import drive_table
 
+        summary = self.summary()
         doc = {
             "format": "hdsim-fit-1",
             "unit": self.unit,
             "test": self.measurement.test,
             "source": str(self.measurement.source),
             "effects": {f: getattr(self.model, f).id for f in SLOTS},
-            "parameters": {k: float(v) for k, v in self.params.items()},
+            "parameters": summary["params"],
             "offset": {"angle_offset_rad": float(self.offset)},
-            "uncertainty": {k: float(v) for k, v in self.uncertainty.items()},
-            "fit": {"rows": self.n, "rmse_rad": self.rmse_rad, "max_abs_error_rad": self.max_abs_rad,
-                    "bic": self.bic, "n_params": self.n_params},
+            "uncertainty": summary["uncertainty"],
+            "fit": {key: summary[key] for key in ("rows", "rmse_rad", "max_abs_error_rad", "bic", "n_params")},
         }
         table = drive_table(self.model)
         if table:  # a drive that is no built-in unit: the file's table rebuilds it

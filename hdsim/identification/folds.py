@@ -53,11 +53,10 @@ def _cycles(legs, torque):
             out.append(current)
             current, fell = [], False
         fell = fell or not rising
-    if current:
-        if out:
-            out[-1] += current
-        else:
-            out.append(current)
+    if current and out:
+        out[-1] += current
+    elif current:
+        out.append(current)
     return out
 
 
@@ -102,8 +101,7 @@ def folds(meas: Measurement) -> tuple[list[np.ndarray], str]:
             masks[int(i >= half)][a:b] = True
         how = "first and second half of the loading legs"
     else:
-        masks[0][: n // 2] = True
-        masks[1][n // 2:] = True
+        masks = [np.arange(n) < n // 2, np.arange(n) >= n // 2]
         how = "first and second half of the time"
     # rows outside any leg go to the nearer fold in time
     rest = ~(masks[0] | masks[1])

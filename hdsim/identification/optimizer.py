@@ -147,14 +147,12 @@ def _trial_points(p: FitProblem) -> np.ndarray:
 def _update(p: FitProblem, r_rows: np.ndarray, has_base: int, steps, trials, tol, twist) -> None:
     k = p.u.size
     if has_base:  # first tick: base point and Jacobian
-        r0 = r_rows[0]
-        p.r = r0
-        p.cost = float(r0 @ r0)
-        p.twist_at_u = twist[0]
+        p.r, p.twist_at_u = r_rows[0], twist[0]
+        p.cost = float(p.r @ p.r)
         if not np.isfinite(p.cost):
             p.done, p.message = True, "failed: the model cannot be evaluated at the start values"
             return
-        J = ((r_rows[1:1 + k] - r0) / steps[:, None]).T
+        J = ((r_rows[1:1 + k] - p.r) / steps[:, None]).T
         # a column the evaluator could not solve carries no slope (a NaN would make every step NaN)
         p.J = np.where(np.isfinite(J), J, 0.0)
         if k == 0:
@@ -182,10 +180,7 @@ def _update(p: FitProblem, r_rows: np.ndarray, has_base: int, steps, trials, tol
         if denom > 0:
             J_new = J_new + np.outer(r_best - pred, du) / denom
         rel = (p.cost - costs[best]) / max(p.cost, 1e-300)
-        p.u = trials[best]
-        p.r = r_best
-        p.twist_at_u = twist[k + best]
-        p.cost = float(costs[best])
+        p.u, p.r, p.twist_at_u, p.cost = trials[best], r_best, twist[k + best], float(costs[best])
         p.lam = max(p.lam * (0.1, 1.0, 10.0)[best] * 0.5, 1e-9)
         p.stalls = p.stalls + 1 if rel < tol else 0
     else:

@@ -394,10 +394,11 @@ def other_starts(model: HarmonicDrive, meas: Measurement) -> list[dict]:
 
 
 def make_problem(model: HarmonicDrive, meas: Measurement, ev: Evaluator, rows=None, start: dict | None = None,
-                 label: str = "", context: FitContext | None = None) -> FitProblem:
+                 label: str = "", context: FitContext | None = None, max_iter: int = FitProblem.max_iter) -> FitProblem:
     """The fit of ``model`` to ``meas``: K0 plus each effect's free parameters.
 
-    ``start`` overrides start values by name (``stiffness.K0``, ``family.parameter``).
+    ``start`` overrides start values by name (``stiffness.K0``, ``family.parameter``);
+    ``max_iter`` caps the optimiser's iterations.
     """
     context = context or fit_context(meas, model)
     start = start or {}
@@ -412,7 +413,7 @@ def make_problem(model: HarmonicDrive, meas: Measurement, ev: Evaluator, rows=No
     u = np.array([tr.to_internal(v) for tr, v in zip(transforms, values)], dtype=float)
     rows = np.ones(len(meas), dtype=bool) if rows is None else np.asarray(rows, dtype=bool)
     return FitProblem(model=model, names=names, transforms=transforms, rows=rows, u=u,
-                      basis=ev.basis(model), label=label,
+                      basis=ev.basis(model), label=label, max_iter=max_iter,
                       nested=nested_start(model, context, names, transforms, values, start))
 
 
