@@ -71,29 +71,29 @@ def fit_many(ev: Evaluator, problems: list[FitProblem], *, tol: float = 1e-3, lo
         requests = []
         for p in pending:
             steps = p.fd_steps()
-            if p.J is None:  # first tick: the start and its Jacobian (and the nested start)
-                trials, kind = None, "start"
+            first = p.J is None
+            if first:  # first tick: the start and its Jacobian (and the nested start)
+                trials = None
                 U = np.vstack([p.u[None, :], p.u[None, :] + np.diag(steps)])
-                if _takes_nested(p, kind):
+                if _takes_nested(p, first):
                     U = np.vstack([U, p.nested.u[None, :]])
             else:  # Jacobian at the current point and trial steps from the previous one
                 trials = _trial_points(p)
                 U = np.vstack([p.u[None, :] + np.diag(steps), trials])
-                kind = "iterate"
-            requests.append((p, kind, steps, U, trials))
+            requests.append((p, first, steps, U, trials))
         models = [p.batch_model(U) for p, _, _, U, _ in requests]
         twist = ev.twist(models)
         ticks += 1
         row = 0
-        for p, kind, steps, U, trials in requests:
+        for p, first, steps, U, trials in requests:
             size = U.shape[0] if p.names else 1
             block = twist[row:row + size]
             row += size
             r_rows = row_residuals(ev, p, block)
-            if _takes_nested(p, kind):
+            if _takes_nested(p, first):
                 _hold_nested(p, r_rows[-1], block[-1])
                 r_rows, block = r_rows[:-1], block[:-1]
-            _update(p, r_rows, kind == "start", steps, trials, tol, block)
+            _update(p, r_rows, first, steps, trials, tol, block)
             if p.done:
                 _keep_nested(p)
         pending = [p for p in pending if not p.done]
@@ -102,9 +102,9 @@ def fit_many(ev: Evaluator, problems: list[FitProblem], *, tol: float = 1e-3, lo
     return ticks
 
 
-def _takes_nested(p: FitProblem, kind: str) -> bool:
+def _takes_nested(p: FitProblem, first: bool) -> bool:
     """True on the first pass of a fit with a nested start not yet evaluated."""
-    return kind == "start" and p.nested is not None and p.nested.r is None
+    return first and p.nested is not None and p.nested.r is None
 
 
 def _hold_nested(p: FitProblem, r: np.ndarray, twist: np.ndarray) -> None:
@@ -144,7 +144,7 @@ def _trial_points(p: FitProblem) -> np.ndarray:
     return np.array(out)
 
 
-def _update(p: FitProblem, r_rows: np.ndarray, has_base: int, steps, trials, tol, twist) -> None:
+def _update(p: FitProblem, r_rows: np.ndarray, has_base: bool, steps, trials, tol, twist) -> None:
     k = p.u.size
     if has_base:  # first tick: base point and Jacobian
         p.r, p.twist_at_u = r_rows[0], twist[0]

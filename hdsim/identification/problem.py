@@ -258,7 +258,6 @@ class Evaluator:
     def __init__(self, meas: Measurement, max_steps: int | None = None):
         max_steps = STEP_BUDGET if max_steps is None else int(max_steps)
         self.meas = meas
-        self.test = meas.test
         self.t = np.asarray(meas.time, dtype=float)
         self.T = np.asarray(meas.torque, dtype=float)
         self.y = np.asarray(meas.angle, dtype=float)
