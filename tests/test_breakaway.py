@@ -106,9 +106,11 @@ def test_cli_fit_json_gives_the_contract_metrics_beside_the_catalog(tmp_path, cl
     assert (tmp_path / "rep" / "index.html").read_text().count("data:image/png;base64,") >= 2
 
 
-def test_the_fitted_drive_breaks_away_at_the_measured_level():
+def test_the_fitted_drive_breaks_away_at_the_measured_level(tmp_path):
     cols, meta, tr = tb.make_breakaway_data(("friction",), seed=1)
     result = fit(_measurement(cols, meta), "friction")
+    saved = result.save(str(tmp_path / "b.fit.toml"))  # a Path, as every fit's save returns
+    assert saved == tmp_path / "b.fit.toml" and saved.read_text().startswith("# hdsim breakaway fit")
     law = result.drive.input_friction
     assert law.starting_torque == pytest.approx(tr["T_s"]["forward"], rel=0.05)
     assert law.coulomb_torque == pytest.approx(tr["T_c"]["forward"], rel=0.15)

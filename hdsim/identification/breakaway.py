@@ -30,6 +30,7 @@ identity check ``broke_away`` fails: ``wrong_test``).
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -173,7 +174,7 @@ class BreakawayFit(TorqueFit):
         from hdsim.atomic import write_text_atomic
 
         write_text_atomic(path, self.to_toml())
-        return path
+        return Path(path)
 
     def summary(self) -> dict:
         """JSON-ready summary (the ``hdsim fit --json`` object of a breakaway test)."""
