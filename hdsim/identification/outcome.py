@@ -56,9 +56,7 @@ def assess(diagnosis_json: dict, data: dict, kind) -> tuple[str, str]:
         return "improved", reasons[0] if reasons else ""
     if explained:
         return ("cannot_decide", open_pairs[0]) if open_pairs else ("nothing_missing", "")
-    if reasons:
-        return "cannot_decide", reasons[0]
-    return "cannot_decide", kind.unexplained()
+    return "cannot_decide", reasons[0] if reasons else kind.unexplained()
 
 
 def twist_limits(kind, diagnosis_json: dict, data: dict, ranking: list) -> list[str]:
@@ -79,8 +77,7 @@ def twist_limits(kind, diagnosis_json: dict, data: dict, ranking: list) -> list[
     if kind.needs_reversals and int(data.get("reversals", 2)) < 2:
         out.append("a full torque cycle and back (0 → +T → −T → 0): without reversals the loop that "
                    "friction, hysteresis and backlash leave cannot be seen")
-    for pair in diagnosis_json.get("ambiguous", []):
-        out.append(pair["measurement"])
+    out += [pair["measurement"] for pair in diagnosis_json.get("ambiguous", [])]
     if data.get("loading_rates", 2) < 2 and ranking and kind.rate_dependent(ranking[0]["family"]):
         out.append("the same torque cycle at a second loading rate (4× faster or slower): with one rate, "
                    "rate-dependent losses cannot be told from friction")

@@ -189,10 +189,9 @@ def sweep_predictions(fit, scale) -> list[Prediction]:
         Running torque forward and reverse at 2000 rpm and the starting torque, on the
         input (wave-generator) shaft [N·m].
     """
-    figures = [("running torque at 2000 rpm, forward", lambda law: float(law.running_torque(CATALOG_SPEED)),
-                getattr(scale, "running_torque", 0.0)),
-               ("running torque at 2000 rpm, reverse", lambda law: float(-law.running_torque(-CATALOG_SPEED)),
-                getattr(scale, "running_torque", 0.0)),
+    running = getattr(scale, "running_torque", 0.0)
+    figures = [("running torque at 2000 rpm, forward", lambda law: float(law.running_torque(CATALOG_SPEED)), running),
+               ("running torque at 2000 rpm, reverse", lambda law: float(-law.running_torque(-CATALOG_SPEED)), running),
                ("starting torque", lambda law: float(law.starting_torque), getattr(scale, "starting_torque", 0.0))]
     coordinates = fit.coordinates
     if coordinates is not None:  # the figures are linear in the amplitudes: one step of each
@@ -201,8 +200,7 @@ def sweep_predictions(fit, scale) -> list[Prediction]:
     out = []
     for label, figure, datasheet in figures:
         value = figure(fit.law)
-        low = high = np.nan
-        method = "no covariance"
+        low, high, method = np.nan, np.nan, "no covariance"
         if coordinates is not None:
             g = np.zeros(sd.size)
             for j, law in moved.items():

@@ -37,6 +37,14 @@ def _x(meas):
     return np.asarray(meas.angle, dtype=float)
 
 
+def _by_direction(ax, T, meas, residual) -> None:
+    """Residual [arcsec] against torque, loading and unloading in two colours."""
+    v = views(meas, residual)
+    r = v["residual"] * ARCSEC_PER_RAD
+    ax.plot(T[v["direction"] > 0], r[v["direction"] > 0], ".", ms=2, color="tab:blue", label="loading")
+    ax.plot(T[v["direction"] <= 0], r[v["direction"] <= 0], ".", ms=2, color="tab:red", label="unloading")
+
+
 def twist_figures(diagnosis, folder) -> list[tuple[Path, str]]:
     """Draw the twist figures of ``diagnosis`` into ``folder``; [(path, caption)]."""
     folder = Path(folder)
@@ -46,47 +54,42 @@ def twist_figures(diagnosis, folder) -> list[tuple[Path, str]]:
     T = np.asarray(meas.torque, dtype=float)
     t = np.asarray(meas.time, dtype=float)
     arcsec = ARCSEC_PER_RAD
+    ideal = np.asarray(meas.wg_angle) / meas.ratio if meas.wg_driven else 0  # the kinematic angle of a driven record
     ends = (first, last) if last is not first else (first,)  # one curve per distinct model
     drawn = []
 
     # measured vs model
-    fig = new_figure((7, 4.5))
-    ax = fig.subplots()
+    ax = new_figure((7, 4.5)).subplots()
     y = _x(meas)
     ax.plot(T, (y - first.fit.offset) * arcsec, ".", ms=2, color="0.6", label="measured")
-    for step, style in zip(ends, ("--", "-")[-len(ends):]):
-        model = step.fit.prediction - (np.asarray(meas.wg_angle) / meas.ratio if meas.wg_driven else 0)
-        ax.plot(T, (model - first.fit.offset) * arcsec, style, lw=1, label=f"model: {step_label(step)}")
-    ax.set_xlabel("torque [N·m]")
-    ax.set_ylabel("angle − offset [arcsec]")
-    ax.set_title("measured vs model")
+    # each distinct model on the axis of `_x`, less the first offset [arcsec]: drawn whole and in the inset
+    models = [(step.fit.prediction - ideal - first.fit.offset) * arcsec for step in ends]
+    styles = ("--", "-")[-len(ends):]
+    for step, style, model in zip(ends, styles, models):
+        ax.plot(T, model, style, lw=1, label=f"model: {step_label(step)}")
+    ax.set(xlabel="torque [N·m]", ylabel="angle − offset [arcsec]", title="measured vs model")
     ax.legend(fontsize=8, loc="upper left")
     # zoomed where the first model misses most: a misfit of arcseconds on a span of hundreds
     worst = int(np.argmax(np.abs(first.fit.residual)))
     near = np.abs(T - T[worst]) <= 0.08 * max(float(np.ptp(T)), 1e-12)
     inset = ax.inset_axes([0.6, 0.07, 0.37, 0.37])
     inset.plot(T[near], (y[near] - first.fit.offset) * arcsec, ".", ms=2, color="0.6")
-    for step, style in zip(ends, ("--", "-")[-len(ends):]):
-        model = step.fit.prediction - (np.asarray(meas.wg_angle) / meas.ratio if meas.wg_driven else 0)
+    for style, model in zip(styles, models):
         # NaN outside the window: the legs that pass through it are drawn apart, not joined
-        inset.plot(T, np.where(near, (model - first.fit.offset) * arcsec, np.nan), style, lw=1)
+        inset.plot(T, np.where(near, model, np.nan), style, lw=1)
     inset.set_xlim(float(np.min(T[near])), float(np.max(T[near])))
     inset.set_title("where the first model misses most", fontsize=7)
     inset.tick_params(labelsize=7)
-    drawn.append((save(fig, folder / FIGURES[1]), "Measured angle against torque with the first and the last "
+    drawn.append((save(ax.figure, folder / FIGURES[1]), "Measured angle against torque with the first and the last "
                   "model; the inset zooms on the torque where the first model misses most."))
 
     # residual vs torque by direction
     fig = new_figure((10, 4))
     axes = fig.subplots(1, len(ends), sharey=True, squeeze=False)
     for ax, step in zip(axes[0], ends):
-        v = views(meas, step.fit.residual)
-        r = v["residual"] * arcsec
-        ax.plot(T[v["direction"] > 0], r[v["direction"] > 0], ".", ms=2, color="tab:blue", label="loading")
-        ax.plot(T[v["direction"] <= 0], r[v["direction"] <= 0], ".", ms=2, color="tab:red", label="unloading")
+        _by_direction(ax, T, meas, step.fit.residual)
         ax.axvline(0, color="0.8", lw=0.8)
-        ax.set_title(f"residual: {step_label(step)}")
-        ax.set_xlabel("torque [N·m]")
+        ax.set(title=f"residual: {step_label(step)}", xlabel="torque [N·m]")
     axes[0][0].set_ylabel("residual [arcsec]")
     axes[0][0].legend(fontsize=8, markerscale=4)  # the colours mean the same in every panel
     drawn.append((save(fig, folder / FIGURES[2]), "Residual against torque, loading (blue) and unloading (red): "
@@ -101,10 +104,8 @@ def twist_figures(diagnosis, folder) -> list[tuple[Path, str]]:
             axes[0].plot(np.mod(wg, 2 * np.pi), step.fit.residual * arcsec, ".", ms=1.5, label=step_label(step))
             orders, amp = order_spectrum(wg, step.fit.residual, max_order=8.0, n_orders=400)
             axes[1].plot(orders, amp * arcsec, lw=0.8, label=step_label(step))
-        axes[0].set_xlabel("wave-generator angle mod 2π [rad]")
-        axes[0].set_ylabel("residual [arcsec]")
-        axes[1].set_xlabel("order of the wave-generator angle")
-        axes[1].set_ylabel("amplitude [arcsec]")
+        axes[0].set(xlabel="wave-generator angle mod 2π [rad]", ylabel="residual [arcsec]")
+        axes[1].set(xlabel="order of the wave-generator angle", ylabel="amplitude [arcsec]")
         axes[1].legend(fontsize=8)
     else:
         fig = new_figure((7, 4))
@@ -115,9 +116,8 @@ def twist_figures(diagnosis, folder) -> list[tuple[Path, str]]:
             spec = np.abs(np.fft.rfft(r)) * 2.0 / r.size
             freq = np.fft.rfftfreq(r.size, dt)
             ax.loglog(freq[1:], spec[1:] * arcsec, lw=0.7, label=step_label(step))
-        ax.set_xlabel("frequency [Hz]")
-        ax.set_ylabel("residual amplitude [arcsec]")
-        ax.set_title("residual spectrum (white noise is flat)")
+        ax.set(xlabel="frequency [Hz]", ylabel="residual amplitude [arcsec]",
+               title="residual spectrum (white noise is flat)")
         ax.legend(fontsize=8)
     drawn.append((save(fig, folder / FIGURES[3]), "Where the residual's energy lies: a line here is a periodic effect "
                   "the model misses; white noise is flat."))
@@ -125,16 +125,14 @@ def twist_figures(diagnosis, folder) -> list[tuple[Path, str]]:
     # loop width vs rate: only with two rates or more
     loops = [(step, *_loop_by_rate(views(meas, step.fit.residual))) for step in steps]
     if all(len(rates) >= 2 for _, rates, _ in loops):
-        fig = new_figure((7, 4))
-        ax = fig.subplots()
+        ax = new_figure((7, 4)).subplots()
         for step, rates, widths in loops:
             ax.plot(rates, np.array(widths) * arcsec, "o-", label=step_label(step))
-        ax.set_xlabel("loading rate |dT/dt| [N·m/s]")
-        ax.set_ylabel("residual loop: unloading − loading [arcsec]")
+        ax.set(xlabel="loading rate |dT/dt| [N·m/s]", ylabel="residual loop: unloading − loading [arcsec]")
         ax.axhline(0, color="0.8", lw=0.8)
         ax.legend(fontsize=8)
-        drawn.append((save(fig, folder / FIGURES[4]), "The residual loop per loading rate: a width that grows with the "
-                      "rate is damping, a constant one friction."))
+        drawn.append((save(ax.figure, folder / FIGURES[4]), "The residual loop per loading rate: a width that grows "
+                      "with the rate is damping, a constant one friction."))
 
     return drawn
 
@@ -171,10 +169,7 @@ def twist_fit_figure(result, folder) -> tuple[Path, str]:
     top.plot(T, model * ARCSEC_PER_RAD, "-", lw=1, label="model: " + ("+".join(result.families) or "base"))
     top.set(ylabel="angle − offset [arcsec]", title="measured vs fitted model")
     top.legend(fontsize=8)
-    v = views(meas, result.residual)
-    r = v["residual"] * ARCSEC_PER_RAD
-    bottom.plot(T[v["direction"] > 0], r[v["direction"] > 0], ".", ms=2, color="tab:blue", label="loading")
-    bottom.plot(T[v["direction"] <= 0], r[v["direction"] <= 0], ".", ms=2, color="tab:red", label="unloading")
+    _by_direction(bottom, T, meas, result.residual)
     bottom.set(xlabel="torque [N·m]", ylabel="residual [arcsec]")
     bottom.legend(fontsize=8, markerscale=4)
     return (save(fig, Path(folder) / "measured_vs_model.png"),

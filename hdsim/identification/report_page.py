@@ -28,7 +28,8 @@ import numpy as np
 from hdsim.atomic import write_text_atomic
 from hdsim.io.figures import save_figure
 
-__all__ = ["Page", "new_figure", "save", "step_label", "diagnosis_page", "wrong_test_page", "rounded", "provenance", "fit_page"]
+__all__ = ["Page", "new_figure", "save", "step_label", "diagnosis_page", "wrong_test_page", "rounded", "provenance",
+           "fit_page"]
 
 STYLE = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}"
          "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px;font-size:90%}"
@@ -62,28 +63,26 @@ class Page:
     title: str
     blocks: list = field(default_factory=list)
 
-    def heading(self, text: str) -> "Page":
-        self.blocks.append(("h2", text))
+    def _add(self, kind: str, value, shown=True) -> "Page":
+        """Append a block, unless ``shown`` is empty (an empty text, table or list is left out)."""
+        if shown:
+            self.blocks.append((kind, value))
         return self
+
+    def heading(self, text: str) -> "Page":
+        return self._add("h2", text)
 
     def text(self, text: str, strong: bool = False) -> "Page":
-        if text:
-            self.blocks.append(("strong" if strong else "p", text))
-        return self
+        return self._add("strong" if strong else "p", text, text)
 
     def table(self, head, rows) -> "Page":
-        if rows:
-            self.blocks.append(("table", (tuple(head), [tuple(r) for r in rows])))
-        return self
+        return self._add("table", (tuple(head), [tuple(r) for r in rows]), rows)
 
     def bullets(self, items) -> "Page":
-        if items:
-            self.blocks.append(("ul", list(items)))
-        return self
+        return self._add("ul", list(items), items)
 
     def figure(self, path: Path, caption: str) -> "Page":
-        self.blocks.append(("figure", (Path(path), caption)))
-        return self
+        return self._add("figure", (Path(path), caption))
 
     def markdown(self) -> str:
         out = [f"# {self.title}", ""]
@@ -109,10 +108,8 @@ class Page:
         for kind, value in self.blocks:
             if kind == "h2":
                 body.append(f"<h2>{esc(value)}</h2>")
-            elif kind == "p":
-                body.append(f"<p>{esc(value)}</p>")
-            elif kind == "strong":
-                body.append(f"<p><b>{esc(value)}</b></p>")
+            elif kind in ("p", "strong"):
+                body.append(f"<p><b>{esc(value)}</b></p>" if kind == "strong" else f"<p>{esc(value)}</p>")
             elif kind == "table":
                 head, rows = value
                 body.append("<table><tr>" + "".join(f"<th>{esc(h)}</th>" for h in head) + "</tr>"
@@ -173,12 +170,12 @@ def _summary_box(page: Page, d: dict, kind) -> None:
     noise floor, and the next measurement: the page in four lines."""
     unit, scale = kind.report_unit
     key, floor = kind.error_key, d["whiteness"].get(_floor_key(kind))
-    rows = [("outcome", d.get("outcome", "").replace("_", " ") or "—"),
-            ("added", ", ".join(d["added"]) or "nothing"),
-            (f"rms [{unit}]", f"{d['baseline'][key] * scale:.3g} → {d['final'][key] * scale:.3g}"
-             + (f" (noise floor {floor * scale:.3g})" if floor else ""))]
-    rows.append(("next measurement", d.get("next_measurement") or "none needed"))
-    page.table(("summary", ""), rows)
+    page.table(("summary", ""), [
+        ("outcome", d.get("outcome", "").replace("_", " ") or "—"),
+        ("added", ", ".join(d["added"]) or "nothing"),
+        (f"rms [{unit}]", f"{d['baseline'][key] * scale:.3g} → {d['final'][key] * scale:.3g}"
+         + (f" (noise floor {floor * scale:.3g})" if floor else "")),
+        ("next measurement", d.get("next_measurement") or "none needed")])
 
 
 def _parameters(page: Page, fitted: dict, kind, result) -> None:
@@ -189,8 +186,7 @@ def _parameters(page: Page, fitted: dict, kind, result) -> None:
     rows = [(name, rounded(float(v), sigma.get(name)), kind.parameter_unit(result, name))
             for name, v in values.items()]
     if rows:
-        page.heading(kind.parameters_heading)
-        page.table(("parameter", "value ± standard uncertainty", "unit"), rows)
+        page.heading(kind.parameters_heading).table(("parameter", "value ± standard uncertainty", "unit"), rows)
 
 
 def _predictions(page: Page, kind, fit, scale_numbers) -> None:
@@ -225,6 +221,11 @@ def _top(page: Page, summary: dict) -> Page:
             line += f"; to decide, record {summary['next_measurement']}"
         page.text(line, strong=True)
     page.text(f"Verdict: {summary['verdict']}" if summary.get("verdict") else "")
+    return _checks(page, summary)
+
+
+def _checks(page: Page, summary: dict) -> Page:
+    """The data checks of ``summary`` as a table under "The data" (nothing without checks)."""
     checks = [(c["status"], c["check"], c["message"]) for c in summary.get("checks", [])]
     return page.heading("The data").table(CHECK_HEAD, checks) if checks else page
 
@@ -329,23 +330,21 @@ def _residual_vs_time(measurement, fits: list, folder: Path, unit: str, scale: f
     """Residual against time of each (label, fit): stick-slip, drift and the joins of
     concatenated runs show there first."""
     t = np.asarray(measurement.time, dtype=float)
-    fig = new_figure((10, 3.5))
-    ax = fig.subplots()
+    ax = new_figure((10, 3.5)).subplots()
     for label, fit in fits:
         rows = getattr(fit, "rows", None)
         r = np.asarray(fit.residual, dtype=float)
         ax.plot(t, (r if rows is None else np.where(rows, r, np.nan)) * scale, lw=0.6, label=label)
     ax.set(xlabel="time [s]", ylabel=f"residual [{unit}]", title="residual vs time")
     ax.legend(fontsize=8)
-    return save(fig, folder / "residual_vs_time.png"), "Residual (measured − model) against time."
+    return save(ax.figure, folder / "residual_vs_time.png"), "Residual (measured − model) against time."
 
 
 def _common_figures(diagnosis, folder: Path, unit: str, scale: float) -> list:
     """Residual vs time of every step and the error of every step against the noise floor."""
     kind, steps = diagnosis.kind, diagnosis.steps
     out = [_residual_vs_time(diagnosis.measurement, [(step_label(s), s.fit) for s in steps], folder, unit, scale)]
-    fig = new_figure((7, 4))
-    ax = fig.subplots()
+    ax = new_figure((7, 4)).subplots()
     keys = list(kind.fit_errors(steps[0].fit))
     x = np.arange(len(steps))
     width = 0.8 / len(keys)
@@ -358,7 +357,7 @@ def _common_figures(diagnosis, folder: Path, unit: str, scale: float) -> list:
     ax.set_xticks(x, [step_label(s) for s in steps], rotation=15, fontsize=8)
     ax.set(ylabel=f"error [{unit}]", yscale="log", title="error after each step")
     ax.legend(fontsize=8)
-    out.append((save(fig, folder / "error_fall.png"), "The error of every step's model against the noise floor."))
+    out.append((save(ax.figure, folder / "error_fall.png"), "The error of every step's model against the noise floor."))
     return out
 
 
@@ -415,11 +414,7 @@ def diagnosis_page(diagnosis, folder, summary: dict, scale_numbers) -> Path:
         page.heading(heading).table(*head_rows)
     figures = _common_figures(diagnosis, folder, unit, scale)
     figures[1:1] = kind.report_figures(diagnosis, folder, scale_numbers)
-    page.heading("Figures")
-    for path, caption in figures:
-        page.figure(path, caption)
-    page.heading("Reproduce").table(("", ""), provenance(diagnosis.measurement))
-    return page.write(folder)
+    return _close(page, figures, diagnosis.measurement, folder)
 
 
 def fit_page(result, folder, summary: dict, kind, scale_numbers=None) -> Path:
@@ -438,16 +433,19 @@ def fit_page(result, folder, summary: dict, kind, scale_numbers=None) -> Path:
         ("rows fitted", str(summary.get("rows", result.n))),
         (f"rms [{unit}]", f"{summary[kind.error_key] * scale:.3g}" + (f" (noise floor {floor * scale:.3g})"
                                                                      if floor else ""))])
-    checks = [(c["status"], c["check"], c["message"]) for c in summary.get("checks", [])]
-    if checks:
-        page.heading("The data").table(CHECK_HEAD, checks)
+    _checks(page, summary)
     _parameters(page, summary, kind, result)
     _predictions(page, kind, result, scale_numbers)
     figures = [_residual_vs_time(meas, [("+".join(result.families) or "base", result)], folder, unit, scale)]
     figures += kind.fit_figures(result, folder, scale_numbers)
+    return _close(page, figures, meas, folder)
+
+
+def _close(page: Page, figures: list, measurement, folder: Path) -> Path:
+    """The figures and how to reproduce the page, the end of every page with figures; writes
+    the page into ``folder`` and returns ``index.html``."""
     page.heading("Figures")
     for path, caption in figures:
         page.figure(path, caption)
-    page.heading("Reproduce").table(("", ""), provenance(meas))
-    return page.write(folder)
+    return page.heading("Reproduce").table(("", ""), provenance(measurement)).write(folder)
 

@@ -49,8 +49,7 @@ def torque_vs_speed(fit, path, catalog_running_torque: float | None = None) -> P
     rec = fit.record
     side = abs(rec.side_factor)
     torque = np.asarray(rec.measurement.torque, dtype=float)
-    fig = new_figure((7, 4.5))
-    ax = fig.subplots()
+    ax = new_figure((7, 4.5)).subplots()
     # each plateau's running torque as the metrics define it (whole WG turns, per unit of angle),
     # so the points are the fit's numbers; a plateau shorter than a turn shows its plain mean
     speeds = np.array([s.speed for s in rec.segments])
@@ -69,11 +68,10 @@ def torque_vs_speed(fit, path, catalog_running_torque: float | None = None) -> P
     ax.axhline(0.0, color="0.8", lw=0.6)
     # symmetric log: a 28 rpm plateau and the Stribeck rise below it stay apart from 0
     ax.set_xscale("symlog", linthresh=max(0.5 * float(np.min(np.abs(speeds))) * RPM, 1e-3))
-    ax.set_xlabel("wave-generator speed [rpm]")
-    ax.set_ylabel(f"torque on the {rec.measurement.torque_side} [N·m]")
-    ax.set_title("running torque vs speed")
+    ax.set(xlabel="wave-generator speed [rpm]", ylabel=f"torque on the {rec.measurement.torque_side} [N·m]",
+           title="running torque vs speed")
     ax.legend(fontsize=8)
-    return save(fig, Path(path))
+    return save(ax.figure, Path(path))
 
 
 def ripple_vs_angle(fit, path, bins: int = 72) -> Path:
@@ -101,8 +99,7 @@ def ripple_vs_angle(fit, path, bins: int = 72) -> Path:
     model = side * (flat.torque(rec.speed, meas.wg_angle) + fit.inertia * rec.accel)
     level = (np.asarray(meas.torque, dtype=float) - model) * np.sign(rec.speed)
     theta = np.mod(np.asarray(meas.wg_angle, dtype=float), 2.0 * math.pi)
-    fig = new_figure((7, 4))
-    ax = fig.subplots()
+    ax = new_figure((7, 4)).subplots()
     edges = np.linspace(0.0, 2.0 * math.pi, bins + 1)
     which = np.digitize(theta[plateau], edges) - 1
     means = np.array([np.mean(level[plateau][which == b]) if np.any(which == b) else np.nan for b in range(bins)])
@@ -112,11 +109,10 @@ def ripple_vs_angle(fit, path, bins: int = 72) -> Path:
     if fit.law.ripple_orders:
         ripple = side * fit.law.coulomb_torque * (fit.law.modulation(grid) - 1.0)
         ax.plot(np.degrees(grid), ripple, "-", color="C1", label="fitted ripple (WG orders)")
-    ax.set_xlabel("wave-generator angle mod 360 [deg]")
-    ax.set_ylabel(f"level [N·m, {meas.torque_side}]")
-    ax.set_title("ripple vs wave-generator angle")
+    ax.set(xlabel="wave-generator angle mod 360 [deg]", ylabel=f"level [N·m, {meas.torque_side}]",
+           title="ripple vs wave-generator angle")
     ax.legend(fontsize=8)
-    return save(fig, Path(path))
+    return save(ax.figure, Path(path))
 
 
 def fit_figures(fit, stem, catalog_running_torque: float | None = None) -> list[Path]:

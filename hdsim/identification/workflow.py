@@ -133,8 +133,7 @@ class BenchDiagnosis:
 
     def report(self, directory) -> Path:
         """Write the report (``index.html``, ``index.md`` and the figures) into ``directory``."""
-        summary = self.to_json()
-        self.report_path = Path(self.kind.write_report(self.diagnosis, directory, summary, self.scale))
+        self.report_path = Path(self.kind.write_report(self.diagnosis, directory, self.to_json(), self.scale))
         return self.report_path
 
 
@@ -196,8 +195,7 @@ def diagnose(measurement: Measurement, effects=None, *, unit=None, families=None
     prepared, checks, data, wrong, scale = prepare_record(measurement, unit)
     if wrong:
         return WrongTest(measurement, wrong, checks, data)
-    measurement = prepared
-    result = kind.diagnose(measurement, effects, unit=unit, families=families, candidates=candidates,
+    result = kind.diagnose(prepared, effects, unit=unit, families=families, candidates=candidates,
                            max_rounds=max_rounds, max_steps=max_steps, log=log)
     summary = result.to_json()
     outcome, next_measurement = assess(summary, data, kind)
