@@ -32,9 +32,7 @@ FIGURES = ("residual_vs_time.png", "measured_vs_model.png", "residual_vs_torque.
 
 def _x(meas):
     """Angle relative to the kinematic ideal [rad] (stiffness test: the angle itself)."""
-    if meas.wg_driven:
-        return meas.kinematic_error
-    return np.asarray(meas.angle, dtype=float)
+    return meas.kinematic_error if meas.wg_driven else np.asarray(meas.angle, dtype=float)
 
 
 def _by_direction(ax, T, meas, residual) -> None:

@@ -246,13 +246,10 @@ def _number(value, scale: float) -> str:
     return f"{value * scale:.4g}"
 
 
-def _error_columns(kind, row: dict) -> list[str]:
-    fixed = {"step", "effects", "added", "provisional", "other_form", "score"}
-    return [k for k in row if k not in fixed and k.endswith(_floor_key(kind)[len("noise_floor"):])]
-
-
 def _before_after(kind, d: dict, unit: str, scale: float):
-    keys = _error_columns(kind, d["table"][0])
+    # the error columns of the table: those in the kind's error unit
+    fixed = {"step", "effects", "added", "provisional", "other_form", "score"}
+    keys = [k for k in d["table"][0] if k not in fixed and k.endswith(_floor_key(kind)[len("noise_floor"):])]
     head = ["step", "effects", "added"] + [
         f"{ERROR_NAMES.get(k.rsplit('_', 1)[0], k)} [{unit}]" for k in keys] + ["score"]
     rows = []
