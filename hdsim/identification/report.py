@@ -50,7 +50,6 @@ def twist_figures(diagnosis, folder) -> list[tuple[Path, str]]:
     steps = diagnosis.steps
     first, last = steps[0], steps[-1]
     T = np.asarray(meas.torque, dtype=float)
-    t = np.asarray(meas.time, dtype=float)
     arcsec = ARCSEC_PER_RAD
     ideal = np.asarray(meas.wg_angle) / meas.ratio if meas.wg_driven else 0  # the kinematic angle of a driven record
     ends = (first, last) if last is not first else (first,)  # one curve per distinct model
@@ -94,8 +93,8 @@ def twist_figures(diagnosis, folder) -> list[tuple[Path, str]]:
                   "a loop left here is friction or backlash the model misses."))
 
     # spectrum
+    fig = new_figure((10, 4) if meas.wg_driven else (7, 4))
     if meas.wg_driven:
-        fig = new_figure((10, 4))
         axes = fig.subplots(1, 2)
         wg = np.asarray(meas.wg_angle, dtype=float)
         for step in ends:
@@ -106,9 +105,8 @@ def twist_figures(diagnosis, folder) -> list[tuple[Path, str]]:
         axes[1].set(xlabel="order of the wave-generator angle", ylabel="amplitude [arcsec]")
         axes[1].legend(fontsize=8)
     else:
-        fig = new_figure((7, 4))
         ax = fig.subplots()
-        dt = float(np.median(np.diff(t)))
+        dt = float(np.median(np.diff(np.asarray(meas.time, dtype=float))))
         for step in ends:
             r = step.fit.residual - np.mean(step.fit.residual)
             spec = np.abs(np.fft.rfft(r)) * 2.0 / r.size

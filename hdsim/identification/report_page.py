@@ -138,13 +138,12 @@ def rounded(value: float, sigma: float | None) -> str:
     (no more digits than the data determine); the value to 4 digits when there is none."""
     if sigma is None or not math.isfinite(sigma) or sigma <= 0:
         return f"{value:.4g}"
-    digits = max(0, 1 - int(math.floor(math.log10(sigma))))
-    if abs(value) >= 1e5 or abs(value) < 1e-3:  # scientific: the mantissa to the uncertainty's digits
-        exponent = int(math.floor(math.log10(abs(value)))) if value else 0
-        scale = 10.0 ** exponent
-        keep = max(0, 1 - int(math.floor(math.log10(sigma / scale))))
-        return f"({value / scale:.{keep}f} ± {sigma / scale:.{keep}f})e{exponent:+d}"
-    return f"{value:.{digits}f} ± {sigma:.{digits}f}"
+    scientific = abs(value) >= 1e5 or abs(value) < 1e-3  # then the mantissa to the uncertainty's digits
+    exponent = int(math.floor(math.log10(abs(value)))) if scientific and value else 0
+    scale = 10.0 ** exponent
+    keep = max(0, 1 - int(math.floor(math.log10(sigma / scale))))
+    shown = f"{value / scale:.{keep}f} ± {sigma / scale:.{keep}f}"
+    return f"({shown})e{exponent:+d}" if scientific else shown
 
 
 def provenance(measurement) -> list[tuple[str, str]]:
