@@ -154,3 +154,10 @@ def test_a_loop_that_widens_with_the_loading_rate_is_found_when_most_rows_load_s
     assert len(said) == 1 and "wider" in said[0], said
     width = float(re.search(r"loop is ([\d.]+) arcsec", said[0]).group(1))
     assert width == pytest.approx(2 * a * (fast - slow) * ARCSEC_PER_RAD, rel=0.1)
+
+
+def test_an_empty_table_or_list_is_left_out_whatever_iterable_holds_it():
+    from hdsim.identification.report_page import Page
+
+    page = Page("t").table(("a",), (r for r in [])).bullets(x for x in []).table(("a",), iter([("1",)]))
+    assert page.blocks == [("table", (("a",), [("1",)]))]

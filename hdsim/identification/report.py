@@ -138,10 +138,10 @@ def _loop_by_rate(v):
     pos = rate[rate > 0]
     if pos.size < 10:
         return [], []
-    levels = np.unique(np.round(np.log(pos) / 0.2))
+    level = np.round(np.log(np.maximum(rate, 1e-300)) / 0.2)  # fifths of a natural log of the rate
     out_r, out_w = [], []
-    for lv in levels:
-        m = np.abs(np.round(np.log(np.maximum(rate, 1e-300)) / 0.2) - lv) < 0.5
+    for lv in np.unique(level[rate > 0]):
+        m = level == lv
         if np.count_nonzero(m) < 40:
             continue
         down, up = m & (direction < 0), m & (direction > 0)

@@ -76,10 +76,12 @@ class Page:
         return self._add("strong" if strong else "p", text, text)
 
     def table(self, head, rows) -> "Page":
-        return self._add("table", (tuple(head), [tuple(r) for r in rows]), rows)
+        rows = [tuple(r) for r in rows]  # any iterable: a generator is empty only once read
+        return self._add("table", (tuple(head), rows), rows)
 
     def bullets(self, items) -> "Page":
-        return self._add("ul", list(items), items)
+        items = list(items)
+        return self._add("ul", items, items)
 
     def figure(self, path: Path, caption: str) -> "Page":
         return self._add("figure", (Path(path), caption))
