@@ -11,6 +11,7 @@ the current folder); `hdsim.identification.fit.load_fitted` turns it back into a
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 
@@ -131,7 +132,8 @@ def _print_twist(meas, result, summary) -> None:
     print(f"  angle offset {result.offset:.6g} rad ± {result.uncertainty.get('offset_rad', 0):.2g} "
           "(fitted, not counted as error)")
     for name, value in result.internal.items():
-        print(f"  {name:<28} {value:.6g} ± {result.uncertainty.get(name, float('nan')):.2g}")
+        sigma = result.uncertainty.get(name, float("nan"))
+        print(f"  {name:<28} {value:.6g} " + (f"± {sigma:.2g}" if not math.isinf(sigma) else "(not determined)"))
     for line in summary["findings"]:
         print(f"  - {line}")
     print(f"  fitted parameter set: {summary['parameters_file']}")

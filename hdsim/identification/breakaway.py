@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hdsim.errors import InputError, unknown_name
+from hdsim.identification.optimizer import inverse_gram
 from hdsim.identification.running_diagnosis import RunningSession, RunningTorqueTest
 from hdsim.identification.running_fit import TorqueFit, bounded_lsq
 from hdsim.identification.test_kinds import TestKind, register_test_kind
@@ -165,7 +166,7 @@ class BreakawayFit(TorqueFit):
         doc = {"format": "hdsim-breakaway-fit-1", "test": "breakaway", "source": str(self.measurement.source),
                "torque_side": self.measurement.torque_side, "effects": list(self.families),
                "metrics": {k: v for k, v in self.metrics().items() if v is not None},
-               "fitted": self.fitted, "uncertainty": self.uncertainty,
+               "fitted": self.fitted, "uncertainty": {k: v for k, v in self.uncertainty.items() if math.isfinite(v)},
                "fit": {"rows": self.n, "rmse_Nm": self.rmse_Nm, "n_params": self.n_params}}
         return "# hdsim breakaway fit: torques on the file's shaft [N·m], speeds on the WG shaft [rad/s]\n" + \
             tomli_w.dumps(doc)
@@ -180,7 +181,8 @@ class BreakawayFit(TorqueFit):
         """JSON-ready summary (the ``hdsim fit --json`` object of a breakaway test)."""
         rec = self.record
         return {"test": "breakaway", "torque_side": self.measurement.torque_side, "effects": list(self.families),
-                "rows": self.n, "starts": len(rec.starts), "fitted": self.fitted, "uncertainty": self.uncertainty,
+                "rows": self.n, "starts": len(rec.starts), "fitted": self.fitted,
+                "uncertainty": {k: v if math.isfinite(v) else None for k, v in self.uncertainty.items()},
                 "metrics": self.metrics(), "rmse_Nm": self.rmse_Nm,
                 "noise_floor_Nm": rec.noise_floor * abs(rec.side_factor),
                 "breakaways": [{"time_s": float(rec.measurement.time[s.onset]),
@@ -234,7 +236,7 @@ def fit_breakaway(record, families=(), rows=None) -> BreakawayFit:
     rss, ws, names, A, x = best
     side = abs(rec.side_factor)
     residual = (rec.torque - A @ x) * side
-    cov = rss / max(n - len(names), 1) * np.linalg.pinv(A[use].T @ A[use])
+    cov = rss / max(n - len(names), 1) * inverse_gram(A[use])
     units = {"level": side, "asymmetry.reverse_excess": side, "friction.stribeck_drop": side}
     fitted = {k: float(v) * units.get(k, 1.0) for k, v in zip(names, x)}
     uncertainty = {k: float(math.sqrt(max(cov[i, i], 0.0))) * units.get(k, 1.0) for i, k in enumerate(names)}

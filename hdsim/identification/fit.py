@@ -19,6 +19,7 @@ same effects are switched on.
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -207,7 +208,8 @@ class FitResult(FittedRows):
             "offset_rad": self.offset,
             "params": {k: float(v) for k, v in self.params.items()},
             "fitted": {k: float(v) for k, v in self.internal.items()},
-            "uncertainty": {k: float(v) for k, v in self.uncertainty.items()},
+            # None: the record does not determine it (an infinite variance, `optimizer.inverse_gram`)
+            "uncertainty": {k: float(v) if math.isfinite(v) else None for k, v in self.uncertainty.items()},
             "derived": {k: float(v) for k, v in self.derived.items()},
             "iterations": self.iterations,
             "converged": self.converged,
@@ -229,7 +231,7 @@ class FitResult(FittedRows):
             "effects": {f: getattr(self.model, f).id for f in SLOTS},
             "parameters": summary["params"],
             "offset": {"angle_offset_rad": float(self.offset)},
-            "uncertainty": summary["uncertainty"],
+            "uncertainty": {k: v for k, v in summary["uncertainty"].items() if v is not None},
             "fit": {key: summary[key] for key in ("rows", "rmse_rad", "max_abs_error_rad", "bic", "n_params")},
         }
         table = drive_table(self.model)

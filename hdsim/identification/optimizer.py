@@ -255,16 +255,49 @@ def effective_n(r: np.ndarray) -> float:
     return max(r.size * (1.0 - rho) / (1.0 + rho), 2.0)
 
 
+#: a combination of parameters whose singular value, columns scaled to unit norm, is below
+#: this share of the largest is one the record does not determine
+UNDETERMINED_SINGULAR = 1e-12
+
+
+def inverse_gram(A: np.ndarray) -> np.ndarray:
+    """``(AᵀA)⁻¹`` of a least-squares design ``A`` (rows × parameters), with an infinite
+    variance for each parameter the design does not determine.
+
+    The columns are scaled to unit norm first: a parameter's column may be twenty orders of
+    magnitude smaller than another's (a twist per unit of a stiffness coordinate against
+    one per radian of offset), and a pseudo-inverse of the unscaled ``AᵀA`` would truncate
+    it and report a variance of zero for what the record hardly sees. A parameter with no
+    effect (a zero column), or with weight in a combination the scaled design does not
+    determine (`UNDETERMINED_SINGULAR`), gets an infinite variance and no covariance.
+    """
+    k = A.shape[1]
+    norms = np.sqrt(np.einsum("ij,ij->j", A, A))
+    seen = norms > 0
+    _, sv, vt = np.linalg.svd(A[:, seen] / norms[seen], full_matrices=False)
+    kept = sv > UNDETERMINED_SINGULAR * sv[0] if sv.size else sv > 0
+    inverse = (vt[kept].T / sv[kept] ** 2) @ vt[kept] / np.outer(norms[seen], norms[seen])
+    out = np.zeros((k, k))
+    out[np.ix_(seen, seen)] = inverse
+    lost = ~seen
+    lost[np.flatnonzero(seen)] = np.sum(vt[~kept] ** 2, axis=0) > 1e-6
+    out[lost, :] = 0.0
+    out[:, lost] = 0.0
+    out[lost, lost] = np.inf
+    return out
+
+
 def covariance(prob: FitProblem, r: np.ndarray) -> np.ndarray | None:
     """Covariance of the fitted coordinates ``u`` and the offset (last row and column),
-    ``s² (JᵀJ)⁺`` widened by ``n / n_eff`` for a correlated residual; None without a Jacobian."""
+    ``s² (JᵀJ)⁻¹`` (`inverse_gram`: infinite for what the record does not determine) widened
+    by ``n / n_eff`` for a correlated residual; None without a Jacobian."""
     if prob.J is None:
         return None
     n = r.size
     J = np.hstack([prob.J, np.ones((n, 1))])
     s2 = float(r @ r) / max(n - J.shape[1], 1)
     try:
-        return np.linalg.pinv(J.T @ J) * s2 * (n / effective_n(r))
+        return inverse_gram(J) * s2 * (n / effective_n(r))
     except np.linalg.LinAlgError:
         return None
 
@@ -276,6 +309,8 @@ def uncertainty(prob: FitProblem, cov: np.ndarray | None) -> dict:
     if cov is None:
         return {}
     sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
-    out = {name: float(abs(tr.dphys_du(u)) * s) for name, tr, u, s in zip(prob.names, prob.transforms, prob.u, sd)}
+    # an undetermined coordinate stays undetermined whatever its transform's slope (0 at a bound)
+    out = {name: float(abs(tr.dphys_du(u)) * s) if np.isfinite(s) else math.inf
+           for name, tr, u, s in zip(prob.names, prob.transforms, prob.u, sd)}
     out["offset_rad"] = float(sd[-1])
     return out

@@ -122,7 +122,10 @@ def plausibility(fit_summary: dict, drive) -> list[dict]:
         if name == "backlash.gap" and value > GAP_LIMIT_RAD:
             out.append(_warn("gap", f"the fitted gap {value * 180 / 3.141592653589793:.3g}° is no gear backlash "
                              "(catalog classes are arcminutes): a loose coupling or a free output"))
-        if abs(sigma.get(name, 0.0)) > abs(value):
+        if name in sigma and sigma[name] is None:
+            out.append(_warn("uncertainty", f"{name} = {value:.3g}: the record does not determine it (it "
+                             "hardly changes the fit's error)"))
+        elif abs(sigma.get(name) or 0.0) > abs(value):
             out.append(_warn("uncertainty", f"{name} = {value:.3g} ± {sigma[name]:.2g}: the record does not "
                              "determine it (its uncertainty exceeds its value)"))
     return out or [{"check": "plausibility", "status": "ok",

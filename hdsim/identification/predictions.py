@@ -20,6 +20,13 @@ A friction sweep's fit is a law on the wave-generator shaft, linear in its ampli
 direction, averaged over a turn) and its starting torque, each with the band
 ``±1.96 √(g Σ gᵀ)``, exact for a law linear in the amplitudes.
 
+A coordinate the record does not determine (an infinite variance,
+`hdsim.identification.optimizer.inverse_gram`, or a standard uncertainty larger than the
+value it stands for: the parameters the plausibility checks name) is outside the Gaussian
+approximation: draws of it would run drives the record never saw (a negative K1, a loss
+band that excludes the fitted value). A figure that moves with such a coordinate has no
+band (``"not determined by the record"``); one that does not is propagated from the others.
+
 Every set of parameters of one test runs as one batch (`hdsim.scenarios.run.run_scenario`
 on a batch model) through the quasi-static evaluator: the drive was identified by
 quasi-static fits (`hdsim.simulation.quasistatic`), so its parameters mean what that
@@ -54,6 +61,25 @@ Z95 = 1.959964
 SAMPLES = 200
 #: the linearisation is trusted while |second difference| <= this × |first difference|
 NONLINEARITY = 0.2
+#: the method of a band that rests on a coordinate the record does not determine
+UNDETERMINED = "not determined by the record"
+
+
+def _steps(covariance: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(step of each coordinate, which are undetermined, the covariance of the determined
+    ones): a coordinate whose standard deviation exceeds ``scale`` (its own size) is
+    undetermined and steps by ``scale`` (enough to see whether a figure moves with it); a
+    determined one steps by its standard deviation."""
+    variance = np.diag(covariance)
+    undetermined = ~(variance <= scale ** 2)  # NaN and infinity included
+    steps = np.where(undetermined, scale, np.sqrt(np.maximum(np.where(undetermined, 0.0, variance), 0.0)))
+    determined = np.where(undetermined[:, None] | undetermined[None, :], 0.0, covariance)
+    return steps, undetermined, determined
+
+
+def _moves(first: np.ndarray, undetermined: np.ndarray, value: float) -> bool:
+    """Whether a figure with central differences ``first`` moves with an undetermined coordinate."""
+    return bool(np.any(np.abs(first[undetermined]) > 1e-9 * abs(value) + 1e-300))
 
 
 @dataclass(frozen=True)
@@ -104,8 +130,8 @@ def catalog_predictions(result, *, samples: int = SAMPLES, seed: int = 0) -> lis
     catalog = model.provenance.get("catalog") or {}
     if coordinates is None:
         rows, sd = None, np.zeros(0)
-    else:
-        sd = np.sqrt(np.maximum(np.diag(coordinates.covariance), 0.0))
+    else:  # one unit of u: the size of a log coordinate's relative change
+        sd, undetermined, covariance = _steps(coordinates.covariance, np.ones(coordinates.u.size))
         rows = np.vstack([coordinates.u, coordinates.u + np.diag(sd), coordinates.u - np.diag(sd)])
     k = sd.size
     out = []
@@ -120,15 +146,18 @@ def catalog_predictions(result, *, samples: int = SAMPLES, seed: int = 0) -> lis
                 bands[metric] = (np.nan, np.nan, "no covariance")
                 continue
             first = (v[1:k + 1] - v[k + 1:]) / 2.0
-            second = v[1:k + 1] + v[k + 1:] - 2.0 * v[0]
+            if _moves(first, undetermined, v[0]):
+                bands[metric] = (np.nan, np.nan, UNDETERMINED)
+                continue
+            second = np.where(undetermined, 0.0, v[1:k + 1] + v[k + 1:] - 2.0 * v[0])
             if np.all(np.abs(second) <= NONLINEARITY * np.abs(first) + 1e-12 * abs(v[0])):
-                g = first / np.where(sd > 0, sd, 1.0)
-                half = Z95 * float(np.sqrt(max(g @ coordinates.covariance @ g, 0.0)))
+                g = np.where(undetermined, 0.0, first / np.where(sd > 0, sd, 1.0))
+                half = Z95 * float(np.sqrt(max(g @ covariance @ g, 0.0)))
                 bands[metric] = (v[0] - half, v[0] + half, "linearised")
             else:
                 nonlinear.append(metric)
         if nonlinear:  # one batch of draws for every metric of the test that needs them
-            bands.update(_sampled_bands(model, coordinates, scenario, nonlinear, samples, seed))
+            bands.update(_sampled_bands(model, coordinates, covariance, scenario, nonlinear, samples, seed))
         for (_, metric, label, unit), v in zip(wanted, values):
             low, high, method = bands[metric]
             out.append(Prediction(label, unit, float(v[0]), low, high, catalog.get(DATASHEET_KEYS.get(metric, "")),
@@ -136,10 +165,10 @@ def catalog_predictions(result, *, samples: int = SAMPLES, seed: int = 0) -> lis
     return out
 
 
-def _sampled_bands(model, coordinates, scenario, metrics, samples, seed) -> dict:
+def _sampled_bands(model, coordinates, covariance, scenario, metrics, samples, seed) -> dict:
     """``{metric: (low, high, method)}`` from the 2.5-97.5 % quantiles of ``samples`` draws of
-    the coordinates, run as one batch."""
-    draws = np.random.default_rng(seed).multivariate_normal(coordinates.u, coordinates.covariance,
+    the coordinates (``covariance``: of the determined ones), run as one batch."""
+    draws = np.random.default_rng(seed).multivariate_normal(coordinates.u, covariance,
                                                            size=samples, method="eigh")
     sampled = _metrics(model, coordinates, draws, scenario, metrics)
     out = {}
@@ -195,7 +224,8 @@ def sweep_predictions(fit, scale) -> list[Prediction]:
                ("starting torque", lambda law: float(law.starting_torque), getattr(scale, "starting_torque", 0.0))]
     coordinates = fit.coordinates
     if coordinates is not None:  # the figures are linear in the amplitudes: one step of each
-        sd = np.sqrt(np.maximum(np.diag(coordinates.covariance), 0.0))
+        # an amplitude's own size (a micro-N·m when it is 0), as running_plausibility judges it
+        sd, undetermined, covariance = _steps(coordinates.covariance, np.maximum(np.abs(coordinates.x), 1e-6))
         moved = {j: coordinates.law(coordinates.x + sd[j] * np.eye(sd.size)[j]) for j in np.flatnonzero(sd > 0)}
     out = []
     for label, figure, datasheet in figures:
@@ -205,8 +235,11 @@ def sweep_predictions(fit, scale) -> list[Prediction]:
             g = np.zeros(sd.size)
             for j, law in moved.items():
                 g[j] = np.nan if law is None else (figure(law) - value) / sd[j]
-            if np.all(np.isfinite(g)):
-                half = Z95 * float(np.sqrt(max(g @ coordinates.covariance @ g, 0.0)))
+            if np.all(np.isfinite(g)) and _moves(g * sd, undetermined, value):
+                method = UNDETERMINED
+            elif np.all(np.isfinite(g)):
+                half = Z95 * float(np.sqrt(max(np.where(undetermined, 0.0, g) @ covariance
+                                               @ np.where(undetermined, 0.0, g), 0.0)))
                 low, high, method = value - half, value + half, "linear in the amplitudes"
         out.append(Prediction(label, "N·m", value, low, high, datasheet or None, method))
     return out

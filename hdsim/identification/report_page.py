@@ -143,8 +143,8 @@ def rounded(value: float, sigma: float | None) -> str:
     scientific = abs(value) >= 1e5 or abs(value) < 1e-3  # then the mantissa to the uncertainty's digits
     exponent = int(math.floor(math.log10(abs(value)))) if scientific and value else 0
     scale = 10.0 ** exponent
-    keep = max(0, 1 - int(math.floor(math.log10(sigma / scale))))
-    shown = f"{value / scale:.{keep}f} ± {sigma / scale:.{keep}f}"
+    digits = 1 - int(math.floor(math.log10(sigma / scale)))  # negative: tens, hundreds … (14624 ± 37247)
+    shown = f"{round(value / scale, digits):.{max(digits, 0)}f} ± {round(sigma / scale, digits):.{max(digits, 0)}f}"
     return f"({shown})e{exponent:+d}" if scientific else shown
 
 
@@ -184,8 +184,8 @@ def _parameters(page: Page, fitted: dict, kind, result) -> None:
     to their uncertainty, with each one's unit (`TestKind.parameter_unit`)."""
     values = fitted.get("params") or fitted.get("fitted") or {}
     sigma = fitted.get("uncertainty") or {}
-    rows = [(name, rounded(float(v), sigma.get(name)), kind.parameter_unit(result, name))
-            for name, v in values.items()]
+    rows = [(name, f"{float(v):.4g} (not determined by the record)" if name in sigma and sigma[name] is None
+             else rounded(float(v), sigma.get(name)), kind.parameter_unit(result, name)) for name, v in values.items()]
     if rows:
         page.heading(kind.parameters_heading).table(("parameter", "value ± standard uncertainty", "unit"), rows)
 
@@ -204,7 +204,11 @@ def _predictions(page: Page, kind, fit, scale_numbers) -> None:
         digits = 1 - int(math.floor(math.log10((p.high - p.low) / 2))) if banded else None
 
         def shown(x, d=digits):
-            return f"{x:.4g}" if d is None else f"{round(x, d):.{max(d, 0)}f}"
+            if d is None:
+                return f"{x:.4g}"
+            if d > 6 and x:  # a tiny figure: its mantissa to the same digit, not a row of zeros
+                return f"{x:.{max(int(math.floor(math.log10(abs(x)))) + d, 0)}e}"
+            return f"{round(x, d):.{max(d, 0)}f}"
 
         rows.append((p.label, f"{shown(p.value)} {p.unit}", f"{shown(p.low)} – {shown(p.high)}" if banded else "—",
                      "—" if p.datasheet is None else f"{p.datasheet:.6g}", p.method))

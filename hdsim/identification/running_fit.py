@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from hdsim.errors import InputError
-from hdsim.identification.optimizer import FittedRows, effective_n
+from hdsim.identification.optimizer import FittedRows, effective_n, inverse_gram
 from hdsim.io.measurement import Measurement
 from hdsim.io.running_checks import Segment, running_levels, sweep_kinematics
 from hdsim.model.input_friction import InputFriction
@@ -502,7 +502,7 @@ def _covariance(A, r) -> np.ndarray | None:
     n, k = A.shape
     s2 = float(r @ r) / max(n - k, 1)
     try:
-        return np.linalg.pinv(A.T @ A) * s2 * (n / effective_n(r))
+        return inverse_gram(A) * s2 * (n / effective_n(r))
     except np.linalg.LinAlgError:
         return None
 
