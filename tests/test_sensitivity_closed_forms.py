@@ -125,3 +125,28 @@ def test_a_study_of_an_output_below_the_simulators_resolution_is_flagged():
 
     metric = ScenarioMetric("CSG-25-100", ("flexspline.h_pz",), "transmission_accuracy_arcsec", "kinematic_error")
     assert metric.resolution(np.array([42.0, 43.0])) == pytest.approx(STUDY_SOLVER.rtol * 42.5)
+
+
+def test_a_quasistatic_study_that_varies_less_than_the_evaluators_distance_from_the_dynamic_model_is_flagged():
+    # the transmission accuracy moves by ~0.002 arcsec over a ±10 % box, through the
+    # quasi-static evaluator by ten times the dynamic model's change and the other way: its
+    # distance from the dynamic model on the nominal drive (~0.007 arcsec) is its resolution
+    import hdsim
+
+    result = hdsim.sobol("CSG-25-100", ["h_pz", "h_c"], "transmission_accuracy_arcsec", n=16, progress=False)
+    gap = result.extra["evaluator"]["figures"]["quasistatic_gap"]
+    assert result.extra["evaluator"]["chosen"] == "quasistatic" and 1e-3 < gap < 0.05
+    assert not result.checks["ok"]
+    assert any("the simulator's resolution" in flag for flag in result.checks["flags"])
+
+
+def test_a_study_of_the_stiffness_test_computes_the_metric_hdsim_simulate_reports():
+    # a study's stiffness run had 40 output samples a segment, and its K1 was 20 % low
+    import hdsim
+    from hdsim.sensitivity.scenario_outputs import model_function, nominal_values
+
+    nominal = hdsim.run_scenario(hdsim.load_unit("CSG-25-100"), "stiffness", evaluator="quasistatic").metrics
+    for output in ("K1_Nm_per_rad", "torsion_at_rated_arcmin", "lost_motion_centre_line_arcmin"):
+        f = model_function("CSG-25-100", ["h_pz"], output, evaluator="quasistatic")
+        h_pz = nominal_values("CSG-25-100", ["h_pz"])
+        assert f(np.array([list(h_pz.values())]))[0] == pytest.approx(float(np.ravel(nominal[output])[0]), rel=1e-3)
