@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import errno
 import glob
 import io
 import os
@@ -61,6 +62,10 @@ def atomic_path(target: str | os.PathLike):
         The temporary file to write to.
     """
     target = Path(target)
+    if target.exists() and not target.is_file() and not target.is_dir():
+        # the rename would put a file where a device or pipe was (/dev/null, as root)
+        raise OSError(errno.EINVAL, "not a regular file (a device, pipe or socket): a result is not written "
+                      "over it", str(target))
     target.parent.mkdir(parents=True, exist_ok=True)
     _remove_orphans(target)
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.{os.getpid()}.", suffix=".tmp", dir=target.parent)

@@ -34,3 +34,18 @@ def test_a_temporary_file_of_a_killed_writer_is_removed_by_the_next_write(tmp_pa
 def test_a_write_leaves_no_temporary_file(tmp_path):
     write_text_atomic(tmp_path / "a.txt", "x")
     assert [p.name for p in tmp_path.iterdir()] == ["a.txt"]
+
+
+def test_a_device_or_pipe_is_never_replaced_by_a_result(tmp_path, cli):
+    # `--out /dev/null` as root had replaced the system's /dev/null with a regular file
+    import pytest
+
+    pipe = tmp_path / "pipe"
+    os.mkfifo(pipe)
+    with pytest.raises(OSError, match="not a regular file"):
+        write_text_atomic(pipe, "x")
+    data = os.path.join(os.path.dirname(__file__), "data", "stiffness_example.csv")
+    code, _, err = cli("fit", data, "--out", str(pipe), cwd=tmp_path)
+    assert code == 2 and "is not a regular file (a device, pipe or socket)" in err
+    assert len(err.strip().splitlines()) == 1
+    assert pipe.is_fifo()

@@ -34,6 +34,14 @@ def refuse_overwriting_data(path, data, option: str) -> None:
                          f"measurement; give another path")
 
 
+def refuse_special_file(path: Path, option: str) -> None:
+    """InputError when ``path`` is a device, a pipe or a socket (``/dev/null``): a result is
+    written beside it and renamed over it, which would replace the device with a file."""
+    if path.exists() and not path.is_file() and not path.is_dir():
+        raise InputError(f"{option}: {path} is not a regular file (a device, pipe or socket), and a result "
+                         "replaces its file when written; give a file name (to keep nothing, leave the option out)")
+
+
 def check_output_file(path, option: str, data=None) -> Path:
     """Make sure a result file can be written at ``path`` before any work is done.
 
@@ -42,6 +50,7 @@ def check_output_file(path, option: str, data=None) -> Path:
     path = Path(path)
     if path.is_dir():
         raise InputError(f"{option}: {path} is a folder; give a file name with {option} FILE")
+    refuse_special_file(path, option)
     refuse_overwriting_data(path, data, option)
     check_writable_folder(path.parent)
     return path
@@ -63,6 +72,7 @@ def check_output_folder(folder, option: str, names=REPORT_PAGES, data=None) -> P
         if path.is_dir():
             raise InputError(f"{option} {folder}: {path} is a folder, so the results cannot be written "
                              f"there; remove it or give another folder")
+        refuse_special_file(path, f"{option} {folder}")
         refuse_overwriting_data(path, data, f"{option} {folder}")
     return folder
 
