@@ -84,6 +84,7 @@ from hdsim.errors import InputError, SolverError
 from hdsim.identification import breakaway, running_diagnosis  # noqa: F401  (register their test kinds)
 from hdsim.identification.confidence import diagnosis_confidence
 from hdsim.identification.engine import Candidate, Diagnosis, Step
+from hdsim.identification.optimizer import not_judged_reason, reproduces_contained
 from hdsim.identification.fit import (Evaluator, build_model, check_nested, fit, fit_many, make_problem,
                                       parse_effects, result_of)
 from hdsim.identification.folds import folds, one_loading_rate
@@ -304,10 +305,14 @@ class TwistSession:
             except (InputError, SolverError) as exc:
                 scored.append(Candidate.failed(family, effect_id, str(exc)))
                 continue
+            candidate = score_candidate(family, effect_id, res, step, self.kind.thresholds)
             if family not in step.effects:  # an added family holds the step's model (another form does not)
                 for cand_fit, base_fit in zip(res[1:], step.fold_fits):
+                    if not reproduces_contained(cand_fit, base_fit.rss):
+                        candidate.accepted, candidate.reason = False, not_judged_reason(cand_fit, base_fit.rss)
+                        break
                     check_nested(cand_fit.rss, base_fit.rss, f"{family}={effect_id} (hold-out fold fit)")
-            scored.append(score_candidate(family, effect_id, res, step, self.kind.thresholds))
+            scored.append(candidate)
         return scored
 
     def explained(self, step: Step) -> dict:
@@ -333,4 +338,10 @@ class TwistSession:
         return slots
 
     def _results(self, slots: list) -> list:
-        return [result_of(self.evaluator, min(slot, key=lambda p: p.cost), unit=self.unit_name) for slot in slots]
+        out = []
+        for slot in slots:
+            result = result_of(self.evaluator, min(slot, key=lambda p: p.cost), unit=self.unit_name)
+            result.contained_cost = next((p.nested.cost for p in slot if p.nested is not None
+                                          and p.nested.r is not None), None)
+            out.append(result)
+        return out

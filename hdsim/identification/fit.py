@@ -160,6 +160,9 @@ class FitResult(FittedRows):
     rows: np.ndarray
     n_params: int
     ke_coefficients: dict = field(default_factory=dict)
+    #: the cost of the model this one contains, evaluated in this one's structure (its nested
+    #: start, `hdsim.identification.problem.NestedStart`); None without one
+    contained_cost: float | None = None
     iterations: int = 0
     unit: str = ""
     internal: dict = field(default_factory=dict)

@@ -29,6 +29,7 @@ import numpy as np
 from hdsim.identification.problem import Evaluator, FitProblem
 
 __all__ = ["fit_many", "residuals", "bic", "lag1", "effective_n", "uncertainty", "FittedRows", "check_nested",
+           "reproduces_contained",
            "NESTING_TOLERANCE"]
 
 
@@ -215,6 +216,26 @@ def check_nested(candidate_cost: float, baseline_cost: float, label: str = "") -
                            f"above the {baseline_cost:.9g} of the model it contains (by "
                            f"{candidate_cost / max(baseline_cost, 1e-300) - 1.0:.3g} relative; at most "
                            f"{NESTING_TOLERANCE:g})")
+
+
+def reproduces_contained(fit, baseline_cost: float) -> bool:
+    """Whether ``fit``'s structure gives the model it contains the cost that model was
+    fitted at (``fit.contained_cost`` within `NESTING_TOLERANCE` of ``baseline_cost``).
+
+    It does unless the evaluator's own error on the record exceeds its noise: a zero gap
+    or a zero damping changes the path the quasi-static evaluator takes, and on a nearly
+    noise-free record the micro-slip friction's twist then moves by ~1e-6 rad. A fit whose
+    structure cannot reproduce its baseline cannot be judged against it.
+    """
+    contained = getattr(fit, "contained_cost", None)
+    return contained is None or contained <= baseline_cost * (1.0 + NESTING_TOLERANCE) + 1e-300
+
+
+def not_judged_reason(fit, baseline_cost: float) -> str:
+    """Why a candidate that does not reproduce its baseline (`reproduces_contained`) is not judged."""
+    excess = fit.contained_cost / max(baseline_cost, 1e-300) - 1.0
+    return (f"not judged: in this form the model it contains costs {100 * excess:.3g} % more than it was "
+            "fitted at (the evaluator's resolution on this record is coarser than its noise)")
 
 
 class FittedRows:
