@@ -172,6 +172,24 @@ def test_an_output_side_record_gives_the_same_law_and_torques_times_the_ratio():
         RATIO * on_input.metrics()["running_torque_forward_Nm"], rel=1e-9)
 
 
+def test_an_output_torque_of_a_drive_turning_the_other_way_is_read_with_its_own_shafts_sign():
+    # ratio −100: the output turns against the WG, and its torque is signed with the output's
+    # motion; the fit read it so, but the checks and the measured levels took the WG's sign
+    # (a warning on every plateau and running torques of −8.5 N·m)
+    law = FULL.with_updates(ripple_orders=(), ripple_amplitudes=(), ripple_phases=())
+    t, theta, w, a = sweep_profile()
+    torque = -RATIO * (law.torque(w, theta) + 2e-5 * a)  # on the output, with the output's motion
+    meas = make_measurement("running_torque", t, torque, None, wg_angle=theta, ratio=-RATIO,
+                            meta={"torque_side": "output"})
+    checks, data = examine(meas, DriveScale.of(load_unit("CSG-25-100")))[:2]
+    assert {c.check: c.status for c in checks}["torque_opposes_motion"] == "ok"
+    fitted = fit_running(meas, ["friction", "damping"])
+    for way in ("forward", "reverse"):
+        assert data[f"running_torque_{way}_Nm"] > 0
+        assert fitted.metrics()[f"running_torque_{way}_Nm"] == pytest.approx(data[f"running_torque_{way}_Nm"])
+    assert fitted.law.coulomb_torque == pytest.approx(law.coulomb_torque, rel=2e-3)
+
+
 def test_effects_of_the_elastic_path_are_refused_for_a_sweep():
     assert parse_running_effects("stribeck,ripple") == ["friction", "ripple"]
     with pytest.raises(InputError, match="elastic path"):

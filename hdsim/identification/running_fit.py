@@ -232,7 +232,9 @@ class RunningFit(TorqueFit):
     def _running_torques(self) -> dict:
         rec = self.record
         side = abs(rec.side_factor)
-        measured = running_levels(self.measurement.torque, self.measurement.wg_angle, rec.segments)
+        # with the sign of the WG's motion, as the levels are read (`running_checks.shaft_sign`)
+        measured = running_levels(np.sign(rec.side_factor) * np.asarray(self.measurement.torque, dtype=float),
+                                  self.measurement.wg_angle, rec.segments)
         grid = np.linspace(0.0, 2.0 * math.pi, 72, endpoint=False)
         out = {}
         for way, direction in (("forward", 1), ("reverse", -1)):

@@ -29,7 +29,7 @@ import numpy as np
 from hdsim.io.check import Check
 from hdsim.signals import breakaway_episodes, noise_level
 
-__all__ = ["Segment", "speed_and_acceleration", "sweep_kinematics", "constant_speed_segments", "distinct_speeds",
+__all__ = ["Segment", "shaft_sign", "speed_and_acceleration", "sweep_kinematics", "constant_speed_segments", "distinct_speeds",
            "running_checks", "turn_speed", "whole_turns", "turn_mean", "running_levels", "PLATEAU_TOLERANCE"]
 
 #: a plateau: the speed stays within this fraction of its running mean
@@ -208,6 +208,14 @@ def _close(out, t, start, stop, mean, min_duration, min_rows, top):
 
 
 
+def shaft_sign(meas) -> float:
+    """+1, or −1 for a torque on the output of a drive whose output turns against the wave
+    generator (a negative ratio): a torque is signed with the motion of the shaft it is on,
+    and ``shaft_sign × torque`` has the sign of the WG's motion."""
+    negative = meas.torque_side == "output" and meas.ratio is not None and float(meas.ratio) < 0
+    return -1.0 if negative else 1.0
+
+
 def running_levels(torque, angle, segments) -> dict:
     """The running torque of each direction, model-free: the mean torque magnitude over the
     whole WG turns of its plateaus (`whole_turns`), per unit of angle (`turn_mean`) [unit of
@@ -285,8 +293,10 @@ def running_checks(meas, drive) -> tuple[list, dict]:
                          f"{', '.join(f'{v * RPM_PER_RAD_S:.3g}' for v in speeds)} rpm of the wave generator: "
                          f"{steady_rows} of {torque.size} rows; the rest (ramps, rests, idle legs) enter the "
                          "fit only where the drive moves"))
+    # the torque follows its own shaft's motion: the output turns against the WG for a negative ratio
+    shaft = shaft_sign(meas)
     levels = [float(np.median(torque[s.start:s.stop])) for s in segments]
-    follows = [np.sign(level) == np.sign(s.speed) for level, s in zip(levels, segments)]
+    follows = [np.sign(level) == shaft * np.sign(s.speed) for level, s in zip(levels, segments)]
     directions = {int(np.sign(s.speed)) for s in segments}
     if np.mean(follows) < 0.75:
         checks.append(Check("torque_opposes_motion", "warn", f"the torque has the sign of the motion on "
@@ -297,7 +307,7 @@ def running_checks(meas, drive) -> tuple[list, dict]:
                              "recorded: whether it reverses with the direction is not seen)"))
     else:
         checks.append(Check("torque_opposes_motion", "ok", "the torque changes sign with the direction"))
-    run = running_levels(torque, meas.wg_angle, segments)
+    run = running_levels(shaft * torque, meas.wg_angle, segments)
     data.update({f"running_torque_{k}_Nm" if not k.endswith("turns") else f"running_torque_{k}": v
                  for k, v in run.items()})
     shown = [f"{run[w]:.4g} N·m {w} over {run[w + '_turns']} whole WG turn(s)" for w in ("forward", "reverse")
