@@ -190,6 +190,17 @@ def test_an_output_torque_of_a_drive_turning_the_other_way_is_read_with_its_own_
     assert fitted.law.coulomb_torque == pytest.approx(law.coulomb_torque, rel=2e-3)
 
 
+def test_columns_a_record_cannot_tell_apart_do_not_stop_the_fit_as_an_internal_error():
+    # the shipped kinematic-error record read as a sweep: one speed, a level, its direction
+    # asymmetry and the Stribeck rise are one column there; the solver split them into
+    # ±3e11 N·m that cancel, the law lost their digits and the fit stopped (exit 1)
+    from pathlib import Path
+
+    meas = load_measurement(Path(__file__).parent / "data" / "ke_example.csv", test="running_torque")
+    law = fit_running(meas, ["friction", "damping", "ripple"]).law
+    assert max(abs(law.coulomb_torque), abs(law.coulomb_asymmetry), abs(law.starting_torque)) < 1e3
+
+
 def test_effects_of_the_elastic_path_are_refused_for_a_sweep():
     assert parse_running_effects("stribeck,ripple") == ["friction", "ripple"]
     with pytest.raises(InputError, match="elastic path"):

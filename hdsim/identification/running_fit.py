@@ -47,6 +47,9 @@ __all__ = ["SweepRecord", "Segment", "TorqueFit", "RunningFit", "fit_running", "
 SHAPE = "shape"
 #: rows slower than this fraction of the slowest plateau are left out of the fit
 MOVING_FRACTION = 0.5
+#: columns (scaled to unit norm) whose smallest singular value is below this share of the
+#: largest hold a combination the record does not determine (`bounded_lsq`)
+DEGENERATE = 1e-8
 
 
 @dataclass(frozen=True, eq=False)
@@ -387,7 +390,16 @@ def bounded_lsq(A, y, lower, upper) -> np.ndarray:
 
     scale = np.sqrt(np.sum(A * A, axis=0))
     scale[scale == 0] = 1.0
-    sol = lsq_linear(A / scale, y, bounds=(lower * scale, upper * scale), method="bvls")
+    scaled = A / scale
+    singular = np.linalg.svd(scaled, compute_uv=False)
+    if singular.size and singular[-1] < DEGENERATE * singular[0]:
+        # columns the record cannot tell apart (a level and its direction asymmetry on a
+        # record turning one way): BVLS would pick any of their combinations, ±3e11 N·m that
+        # cancel and lose their digits in the law; a ridge far below the data's own
+        # directions picks the smallest
+        ridge = DEGENERATE * singular[0] * np.eye(scaled.shape[1])
+        scaled, y = np.vstack([scaled, ridge]), np.concatenate([y, np.zeros(scaled.shape[1])])
+    sol = lsq_linear(scaled, y, bounds=(lower * scale, upper * scale), method="bvls")
     return sol.x / scale
 
 
