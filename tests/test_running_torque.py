@@ -201,6 +201,17 @@ def test_columns_a_record_cannot_tell_apart_do_not_stop_the_fit_as_an_internal_e
     assert max(abs(law.coulomb_torque), abs(law.coulomb_asymmetry), abs(law.starting_torque)) < 1e3
 
 
+def test_both_angles_that_contradict_the_ratio_are_said_to():
+    # the output angle is wg/100 but the file says 50: the law on the input came out doubled, unsaid
+    law = FULL.with_updates(ripple_orders=(), ripple_amplitudes=(), ripple_phases=())
+    t, theta, w, a = sweep_profile()
+    meas = make_measurement("running_torque", t, RATIO * law.torque(w, theta), theta / RATIO, wg_angle=theta,
+                            ratio=RATIO / 2, meta={"torque_side": "output"})
+    checks = {c.check: c for c in examine(meas, DriveScale.of(load_unit("CSG-25-100")))[0]}
+    assert checks["ratio_consistent"].status == "warn"
+    assert checks["ratio_consistent"].message.startswith("the output turns 0.5 times the wave-generator angle")
+
+
 def test_effects_of_the_elastic_path_are_refused_for_a_sweep():
     assert parse_running_effects("stribeck,ripple") == ["friction", "ripple"]
     with pytest.raises(InputError, match="elastic path"):

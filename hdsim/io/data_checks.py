@@ -339,17 +339,24 @@ def _kinematic_error_identity(meas, drive: DriveScale) -> list[Check]:
                             "logged twice"))
     else:
         checks.append(Check("kinematic_error_not_zero", "ok", f"the kinematic error spans {_arcmin(np.ptp(ke))}"))
-    travel = float(np.ptp(wg / meas.ratio))
-    if travel > 0:
-        slope = float(np.polyfit(wg / meas.ratio, out_angle, 1)[0])
-        if abs(slope - 1.0) > 0.01:
-            checks.append(Check("ratio_consistent", "fail", f"the output turns {slope:.4g} times the "
-                                f"wave-generator angle divided by the ratio {meas.ratio:g}: a wrong ratio, or "
-                                "an angle in other units"))
-        else:
-            checks.append(Check("ratio_consistent", "ok", f"the output follows the wave generator through "
-                                f"the ratio {meas.ratio:g} (slope {slope:.5f})"))
-    return checks
+    check = ratio_consistency(meas, "fail")
+    return checks + ([check] if check else [])
+
+
+def ratio_consistency(meas, status: str) -> Check | None:
+    """Does the output turn the wave-generator angle divided by the ratio (within 1 %)? A
+    ``status`` check when it does not; None when the record has no ratio or does not turn."""
+    if meas.ratio is None or meas.wg_angle is None:
+        return None
+    wg, out_angle = np.asarray(meas.wg_angle, dtype=float), np.asarray(meas.angle, dtype=float)
+    if not float(np.ptp(wg / meas.ratio)) > 0:
+        return None
+    slope = float(np.polyfit(wg / meas.ratio, out_angle, 1)[0])
+    if abs(slope - 1.0) > 0.01:
+        return Check("ratio_consistent", status, f"the output turns {slope:.4g} times the wave-generator angle "
+                     f"divided by the ratio {meas.ratio:g}: a wrong ratio, or an angle in other units")
+    return Check("ratio_consistent", "ok", f"the output follows the wave generator through the ratio "
+                 f"{meas.ratio:g} (slope {slope:.5f})")
 
 
 def wrong_test(checks) -> str:

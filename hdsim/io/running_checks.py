@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hdsim.io.check import Check
+from hdsim.io.data_checks import ratio_consistency
 from hdsim.signals import breakaway_episodes, noise_level
 
 __all__ = ["Segment", "shaft_sign", "speed_and_acceleration", "sweep_kinematics", "constant_speed_segments", "distinct_speeds",
@@ -307,6 +308,10 @@ def running_checks(meas, drive) -> tuple[list, dict]:
                              "recorded: whether it reverses with the direction is not seen)"))
     else:
         checks.append(Check("torque_opposes_motion", "ok", "the torque changes sign with the direction"))
+    ratio = ratio_consistency(meas, "warn")  # with both angles logged, a wrong ratio scales an output torque
+    if ratio is not None and ratio.status != "ok":
+        checks.append(Check(ratio.check, ratio.status, ratio.message + (
+            ": the torque on the output is referred to the input by it" if meas.torque_side == "output" else "")))
     run = running_levels(shaft * torque, meas.wg_angle, segments)
     data.update({f"running_torque_{k}_Nm" if not k.endswith("turns") else f"running_torque_{k}": v
                  for k, v in run.items()})
