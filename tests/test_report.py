@@ -161,3 +161,25 @@ def test_an_empty_table_or_list_is_left_out_whatever_iterable_holds_it():
 
     page = Page("t").table(("a",), (r for r in [])).bullets(x for x in []).table(("a",), iter([("1",)]))
     assert page.blocks == [("table", (("a",), [("1",)]))]
+
+
+def test_the_summary_never_says_none_needed_beside_an_open_question():
+    # a near tie decided by its score keeps the measurement that would settle it, and a
+    # result that is not a success says "—", not "none needed" (the page had said both)
+    from pathlib import Path
+
+    import hdsim
+    from hdsim.identification.report_page import Page, _summary_box
+
+    def box(d):
+        page = Page("t")
+        _summary_box(page, d.to_json(), d.kind)
+        return page.markdown()
+
+    d = hdsim.diagnose(Path(__file__).parent / "data" / "stiffness_example.csv")
+    tie = next(a for a in d.to_json()["ambiguous"] if a["added"])
+    assert d.outcome == "found" and d.next_measurement == tie["measurement"]
+    assert f"| next measurement | {tie['measurement']} |" in box(d)
+    left = hdsim.diagnose(Path(__file__).parents[1] / "docs" / "figures" / "tutorial_bench.csv", "friction")
+    assert left.outcome == "improved" and left.next_measurement == ""
+    assert "| next measurement | — |" in box(left)

@@ -50,9 +50,11 @@ def assess(diagnosis_json: dict, data: dict, kind) -> tuple[str, str]:
     # a loss one loading rate could not name (a pair reported, neither of it added) still
     # asks for its measurement, and nothing can be "missing nothing" while it is open
     open_pairs = [a["measurement"] for a in diagnosis_json.get("ambiguous", []) if a.get("added") is False]
+    # a near tie that was decided by a score still has a measurement that would settle it
+    ties = [a["measurement"] for a in diagnosis_json.get("ambiguous", []) if a.get("added") and a.get("measurement")]
     if added:
         if explained:
-            return "found", open_pairs[0] if open_pairs else ""
+            return "found", (open_pairs + ties + [""])[0]
         return "improved", reasons[0] if reasons else ""
     if explained:
         return ("cannot_decide", open_pairs[0]) if open_pairs else ("nothing_missing", "")

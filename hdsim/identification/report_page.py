@@ -176,7 +176,8 @@ def _summary_box(page: Page, d: dict, kind) -> None:
         ("added", ", ".join(d["added"]) or "nothing"),
         (f"rms [{unit}]", f"{d['baseline'][key] * scale:.3g} → {d['final'][key] * scale:.3g}"
          + (f" (noise floor {floor * scale:.3g})" if floor else "")),
-        ("next measurement", d.get("next_measurement") or "none needed")])
+        ("next measurement", d.get("next_measurement")
+         or ("none needed" if d.get("outcome") in ("found", "nothing_missing") else "—"))])
 
 
 def _parameters(page: Page, fitted: dict, kind, result) -> None:
