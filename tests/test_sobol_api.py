@@ -62,6 +62,9 @@ def test_bounds_that_are_not_low_high_pairs_are_refused_in_python_words(value):
     (["h_pz"], {"dists": {"h_c": "unif"}}, "unknown parameter 'h_c' in dists: the study varies h_pz"),
     (["h_pz"], {"dists": {"h_pz": "norm"}, "bounds": {"h_pz": (5e-4, 7e-4)}},
      "'h_pz' is normal: give dists={'h_pz': 'norm:MEAN:SD'} instead of bounds"),
+    # a normal input with its numbers and bounds: the bounds had been dropped without a word
+    (["h_pz"], {"dists": {"h_pz": "norm:6e-4:2e-5"}, "bounds": {"h_pz": (5e-4, 7e-4)}},
+     "'h_pz' is given both dists={'h_pz': 'norm:MEAN:SD'} and bounds: a normal input has no bounds"),
     ([], {}, "sobol needs at least one parameter"),
 ])
 def test_python_errors_name_python_arguments_not_cli_options(drive, params, kwargs, message):

@@ -273,6 +273,9 @@ def build_problem(names, nominal=None, range_frac=None, bounds=None, dists=None,
     out_bounds, out_dists = [], []
     for name in names:
         dist, explicit = _parse_dist(dists.get(name, "unif"), name, wording)
+        if explicit is not None and name in bounds:  # the bounds would be dropped without a word
+            raise InputError(f"'{name}' is given both {wording.dist_of.format(name=name, text='norm:MEAN:SD')} and "
+                             f"{wording.bounds}: a normal input has no bounds; give one of them")
         if explicit is None and name in bounds:
             if dist == "norm":  # LO:HI would silently become MEAN:SD in SALib
                 raise InputError(f"'{name}' is normal: give {wording.dist_of.format(name=name, text='norm:MEAN:SD')} "
