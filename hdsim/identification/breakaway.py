@@ -255,7 +255,7 @@ def breakaway_checks(meas, scale) -> tuple[list, dict]:
     starts = rec.starts if scale is None or slipping_starts(meas.time, meas.angle, output_torque, scale) else []
     if not starts:
         never = Check("broke_away", "fail", "the shaft never started from rest (no rest that held the torque "
-                      "followed by a turn beyond the drive's elastic twist): this is not a breakaway test")
+                      "followed by a turn beyond the drive's elastic twist)")
         return [never], {"starts": 0}
     where = ", ".join(f"{'forward' if s.direction > 0 else 'reverse'} at {float(meas.time[s.onset]):.3g} s, "
                       f"{abs(s.torque) * side:.3g} N·m" for s in starts[:6])
@@ -281,6 +281,7 @@ class BreakawayTest(RunningTorqueTest):
     """The breakaway (starting-torque) test: the torque raised from rest until the drive turns."""
 
     name = "breakaway"
+    record_word = "ramp"
 
     def families(self):
         return dict(FAMILIES)

@@ -69,6 +69,8 @@ class RunningTorqueTest(TestKind):
     report_unit = ("N·m", 1.0)
     thresholds = RUNNING_THRESHOLDS
     stop_when_white = False
+    #: what the verdict calls a record of this kind
+    record_word = "sweep"
 
     def families(self):
         return {family: type(term) for family, term in RUNNING_FAMILIES.items()}
@@ -116,8 +118,9 @@ class RunningTorqueTest(TestKind):
     def verdict(self, w: dict) -> str:
         if w["explained"]:
             return f"explained: the residual is at the noise level (rms {w['rms_over_noise']:.2f}× the noise floor)"
-        return (f"the residual keeps structure (rms {w['rms_over_noise']:.1f}× the noise floor): the sweep holds an "
-                "effect that no running-torque family explains, or explains only in part")
+        return (f"the residual keeps structure (rms {w['rms_over_noise']:.1f}× the noise floor): the "
+                f"{self.record_word} holds an effect that no {self.name.replace('_', '-')} family explains, or "
+                "explains only in part")
 
     def checks(self, meas, scale):
         # imported here: running_checks loads scipy.signal (about a second)

@@ -298,10 +298,10 @@ def interpret_meta(
         rated torque that is not a number (zero ratio, rated torque not positive).
     """
     origin = origin or {}
-    tests = " or ".join(TESTS)
+    tests = ", ".join(list(TESTS)[:-1]) + " or " + list(TESTS)[-1]
     if "test" not in meta:
-        raise where.fail("no '# test:' key; expected '# test: stiffness', '# test: kinematic_error' or "
-                         "'# test: running_torque' (HDF5: a 'test' attribute; a log without keys: --test)")
+        raise where.fail(f"no '# test:' key; expected '# test: T' with T {tests} (HDF5: a 'test' attribute; "
+                         "a log without keys: --test)")
     test = meta["test"].strip()
     if test not in TESTS:
         close = difflib.get_close_matches(test, list(TESTS), n=1, cutoff=0.5)

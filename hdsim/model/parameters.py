@@ -96,7 +96,8 @@ class Parameters:
                 bound = f"({lower:g}, {upper:g}]" if lower <= 0.0 else bound
             if np.any(bad):
                 first = np.atleast_1d(value)[np.argmax(np.atleast_1d(bad))]
-                raise InputError(f"{self.prefix}.{name} = {first:g} is outside {bound} {unit}")
+                raise InputError(f"{self.prefix}.{name} = {first:g} is outside {bound}"
+                                 + (f" {unit}" if unit not in ("", "-") else ""))
             if not isinstance(raw, int):  # a given int stays as written
                 object.__setattr__(self, name, float_if_scalar(raw))
 
