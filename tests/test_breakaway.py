@@ -83,6 +83,7 @@ def test_a_breakaway_labelled_stiffness_is_the_wrong_test_and_a_locked_record_is
     as_breakaway = diagnose(make_measurement("breakaway", locked["time_s"], locked["torque_Nm"],
                                              locked["angle_rad"], ratio=100))
     assert as_breakaway.outcome == "wrong_test" and "never started from rest" in as_breakaway.to_json()["verdict"]
+    assert as_breakaway.to_json()["verdict"].count("not a breakaway test") == 1  # it was said twice
     # and a real locked record is not taken for a breakaway (its checks find no slip)
     from hdsim.identification.workflow import examine_record
 

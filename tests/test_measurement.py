@@ -450,3 +450,19 @@ def test_save_refuses_meta_that_would_break_the_format(tmp_path, stiff_meas):
     with pytest.raises(InputError, match="line break"):
         save_measurement(bad, tmp_path / "m.csv")
     assert not (tmp_path / "m.csv").exists()
+
+
+def test_a_missing_test_key_names_every_test_kind(tmp_path):
+    path = tmp_path / "keyless.csv"
+    path.write_text("time_s,torque_Nm,angle_rad\n" + "".join(f"{i},{i},{i}\n" for i in range(12)))
+    with pytest.raises(InputError) as err:
+        load_measurement(path)
+    assert "stiffness, kinematic_error, running_torque or breakaway" in str(err.value)
+
+
+def test_a_dimensionless_parameter_out_of_range_ends_with_its_range():
+    import hdsim
+
+    with pytest.raises(InputError) as err:
+        hdsim.load_unit("CSG-25-100").with_updates({"wave_generator.balls": 0})
+    assert str(err.value).endswith("is outside [3, 200]")  # it ended in a stray " -"
