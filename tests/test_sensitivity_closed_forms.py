@@ -150,3 +150,23 @@ def test_a_study_of_the_stiffness_test_computes_the_metric_hdsim_simulate_report
         f = model_function("CSG-25-100", ["h_pz"], output, evaluator="quasistatic")
         h_pz = nominal_values("CSG-25-100", ["h_pz"])
         assert f(np.array([list(h_pz.values())]))[0] == pytest.approx(float(np.ravel(nominal[output])[0]), rel=1e-3)
+
+
+class _RefusesACorner:
+    """x1 + x2, refused (NaN) where x1 > 0.6: a range whose corner the model does not accept."""
+
+    def __call__(self, X):
+        X = np.atleast_2d(X)
+        return np.where(X[:, 0] > 0.6, np.nan, X[:, 0] + X[:, 1])
+
+
+def test_a_study_that_dropped_many_blocks_is_flagged_and_one_that_dropped_few_is_not():
+    from hdsim.sensitivity.checks import dropped_flags
+    from hdsim.sensitivity.problem import build_problem
+
+    assert dropped_flags(95, 5) == [] and dropped_flags(60, 40)
+    problem = build_problem(["a", "b"], {}, None, {"a": (0.0, 1.0), "b": (0.0, 1.0)}, None)
+    result = run_study(_RefusesACorner(), problem, 64, workers=1, progress=False, log=lambda *a: None)
+    assert result.analysis["blocks_dropped"] > 0.3 * 64  # 35 of 64 had passed every check
+    assert not result.checks["ok"]
+    assert any("blocks were dropped" in flag for flag in result.checks["flags"])

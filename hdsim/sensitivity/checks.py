@@ -74,6 +74,21 @@ def consistency_checks(S1, ST, S1_half=None, ST_half=None, names=None, tol=0.02)
             "items": items, "flags": flags}
 
 
+#: a study that dropped more than this share of its blocks (rows that failed) is flagged
+DROPPED_SHARE = 0.1
+
+
+def dropped_flags(used: int, dropped: int) -> list[str]:
+    """A flag when more than `DROPPED_SHARE` of the design's blocks were dropped: the indices
+    then describe the part of the box whose rows ran (a corner the model refuses is left
+    out), and pass every check above."""
+    total = used + dropped
+    if not total or dropped <= DROPPED_SHARE * total:
+        return []
+    return [f"{dropped} of {total} blocks were dropped (rows that failed, listed above): the indices describe "
+            "the part of the ranges that ran, not the whole; narrow the ranges to what the model accepts"]
+
+
 #: an output must vary across the design by this many times the simulator's resolution
 RESOLVED_SPREAD = 10.0
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from hdsim.errors import InputError
 from hdsim.sensitivity.analysis import check_outputs, convergence, indices
-from hdsim.sensitivity.checks import consistency_checks, failed_messages, resolution_flags
+from hdsim.sensitivity.checks import consistency_checks, dropped_flags, failed_messages, resolution_flags
 from hdsim.sensitivity.design import check_sizes
 from hdsim.sensitivity.evaluate import evaluate
 from hdsim.sensitivity.store import DONE, PENDING, open_store
@@ -173,10 +173,10 @@ def run_study(func, problem, n, *, seed=0, second_order=False, replicates=4, exe
     checks = consistency_checks(res["S1"], res["ST"], res["S1_conf_replicates"],
                                 res["ST_conf_replicates"], problem.names)
     resolution = getattr(func, "resolution", None)  # a simulator says how finely it resolves its output
-    if callable(resolution):
-        flags = resolution_flags(outputs, resolution(outputs))
-        checks["flags"] += flags
-        checks["ok"] = checks["ok"] and not flags
+    flags = resolution_flags(outputs, resolution(outputs)) if callable(resolution) else []
+    flags += dropped_flags(res["blocks_used"], res["blocks_dropped"])
+    checks["flags"] += flags
+    checks["ok"] = checks["ok"] and not flags
     for line in failed_messages(checks):
         log(line)
     extra = {"conf_level": conf_level, "seed": int(seed), "reused": int(before["done"] + before["failed"])}
