@@ -84,6 +84,11 @@ def test_kinematic_error_scenario_reports_the_contract_metrics():
     ({"input": {"mode": "prescribed", "profile": "hold"}, "linearise": {"compare_below": 5.0}}, "in (0, 1]"),
     ({"input": {"mode": "prescribed", "profile": "constant", "speed_rpm": 100.0},
       "load": {"profile": "opposing", "torque": -0.25}}, "its sign follows the motion"),
+    # a measured load (the 2 s of the contract KE file) shorter than the input profile was held at its
+    # last value for the rest of the run, unsaid
+    ({"input": {"mode": "prescribed", "profile": "constant", "speed_rpm": 100.0, "output_revolutions": 1.0,
+                "csv": str(Path(__file__).parent / "data" / "ke_example.csv")}, "load": {"profile": "csv"}},
+     "a measured load is not extrapolated"),
 ])
 def test_bad_scenarios_are_refused_in_one_line(tables, message):
     with pytest.raises(InputError) as info:

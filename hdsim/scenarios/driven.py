@@ -262,6 +262,10 @@ def bench_from_scenario(model: HarmonicDrive, scenario) -> Bench:
     friction = for_unit(model, data.get("input_friction"))
 
     t_end = max(motion.t_end, load.t_end)
+    if load_kind == "csv" and load.t_end < motion.t_end - 1e-9:  # it would be held at its last value
+        raise InputError(f"{src}: the measured load ends at {load.t_end:.4g} s, before the input profile "
+                         f"({motion.t_end:.4g} s): a measured load is not extrapolated; give a file that covers "
+                         "the run, or a shorter input profile")
     if load_kind == "step" and step_time >= t_end:
         raise InputError(f"{src}: load.step_time_s ({step_time:g} s) must come before the end of the "
                          f"input profile ({t_end:g} s)")
