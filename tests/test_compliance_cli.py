@@ -100,3 +100,21 @@ def test_fe_takes_the_set_dimensions(capsys, coarse_rim):
     base = _json(capsys, "--fe")
     assert report["fe"]["cup"] > base["fe"]["cup"] and report["closed_form"]["cup"] > base["closed_form"]["cup"]
     assert report["fe"]["ratio"] == pytest.approx(1.0, abs=0.01)
+
+
+def test_the_fe_check_says_it_alone_refuses_and_never_builds_a_mesh_without_bound(monkeypatch):
+    # a wall a hundred times thinner than the catalog's needed 542,072 elements and 2.2 GB; the
+    # cap is lowered here so that the catalog drive meets it
+    import pytest
+
+    import hdsim
+    from hdsim.errors import InputError
+    from hdsim.model.fe_check import compliance_report
+
+    pytest.importorskip("skfem")
+    monkeypatch.setattr("hdsim.physics.fe_cup.MAX_ELEMENTS", 1000)
+    with pytest.raises(InputError) as err:
+        compliance_report(hdsim.load_unit("CSG-25-100"), fe=True)
+    text = str(err.value)
+    assert text.startswith("the finite-element check refuses this drive, which the closed forms accept")
+    assert "elements for this section" in text and "it stops at 1,000" in text and "\n" not in text

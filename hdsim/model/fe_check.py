@@ -186,7 +186,11 @@ def compliance_report(model: HarmonicDrive, *, fe: bool = False) -> dict:
               "calibration": {"kappa_mesh": float(np.asarray(model.calibration.kappa_mesh))}}
     if fe:
         rim_closed = float(np.asarray(radial_support(model.geometry, model.wave_generator).rim))
-        rim_fe = fe_rim_stiffness(model)
-        report["fe"] = {**fe_cup_check(model),
-                        "rim_radial": {"fe": rim_fe, "closed_form": rim_closed, "ratio": rim_fe / rim_closed}}
+        try:
+            rim_fe = fe_rim_stiffness(model)
+            report["fe"] = {**fe_cup_check(model),
+                            "rim_radial": {"fe": rim_fe, "closed_form": rim_closed, "ratio": rim_fe / rim_closed}}
+        except InputError as exc:  # the closed forms took this drive; say that only the FE check objects
+            raise InputError(f"the finite-element check refuses this drive, which the closed forms accept "
+                             f"(run without --fe for them): {exc}") from None
     return report

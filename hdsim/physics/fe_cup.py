@@ -83,6 +83,11 @@ def _through_wall(elements_through_wall) -> int:
     return n
 
 
+#: the most elements a section's mesh may have: 200,000 take about 1 GB and a minute; a wall
+#: a hundred times thinner than the catalog's would need twenty times more
+MAX_ELEMENTS = 200_000
+
+
 def _graded(density) -> np.ndarray:
     """Logical positions σ ∈ [0, 1] of node columns, one element per unit of ``∫ density dσ``.
 
@@ -103,8 +108,13 @@ def _structured_mesh(r: np.ndarray, z: np.ndarray):
     loaded faces). Every quad is split into two triangles; a fold-over in the map
     shows up as triangles of both signs or of zero area and is refused.
     """
-    skfem = _skfem()
     columns, rows = r.shape
+    elements = 2 * (columns - 1) * (rows - 1)
+    if elements > MAX_ELEMENTS:  # elements are about as long as the wall is thick: memory grows as 1/wall
+        raise InputError(f"the FE check would need {elements:,} elements for this section (its thinnest wall "
+                         f"is too thin for its length); it stops at {MAX_ELEMENTS:,} (about 1 GB): the closed "
+                         "forms hold without it")
+    skfem = _skfem()
     ids = np.arange(columns * rows).reshape(columns, rows)
     a, b = ids[:-1, :-1].ravel(), ids[1:, :-1].ravel()
     c, d = ids[1:, 1:].ravel(), ids[:-1, 1:].ravel()
