@@ -182,3 +182,10 @@ def test_read_result_refuses_other_files(tmp_path):
     (tmp_path / "x.h5").write_text("not hdf5")
     with pytest.raises(InputError, match="not a readable hdsim result"):
         read_run(tmp_path / "x.h5")
+
+
+def test_a_first_breakpoint_set_above_the_second_is_refused_as_a_drive_file_refuses_it(cli, tmp_path):
+    code, out, err = cli("simulate", "stiffness", "--set", "hardening.T1=60", "--out", str(tmp_path / "o"))
+    assert code == 2 and out == "" and not (tmp_path / "o").exists()
+    assert err.strip().endswith("hardening.T1 = 60 must be below hardening.T2 = 48 N·m (more teeth engage at "
+                                "the second breakpoint)")

@@ -66,6 +66,9 @@ def test_bounds_that_are_not_low_high_pairs_are_refused_in_python_words(value):
     (["h_pz"], {"dists": {"h_pz": "norm:6e-4:2e-5"}, "bounds": {"h_pz": (5e-4, 7e-4)}},
      "'h_pz' is given both dists={'h_pz': 'norm:MEAN:SD'} and bounds: a normal input has no bounds"),
     ([], {}, "sobol needs at least one parameter"),
+    # values that contradict each other: the first breakpoint above the second (it ran)
+    (["hardening.T1"], {"bounds": {"hardening.T1": (10.0, 70.0)}},
+     "the range of hardening.T1 reaches 70, a drive the model refuses: hardening.T1 = 70 must be below"),
 ])
 def test_python_errors_name_python_arguments_not_cli_options(drive, params, kwargs, message):
     with pytest.raises(InputError) as err:

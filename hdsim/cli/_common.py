@@ -85,7 +85,7 @@ def apply_sets(model: HarmonicDrive, scenario: Scenario | None, sets: dict[str, 
         else:
             raise unknown_name("parameter", name, list(known) + list(FAMILIES))
     scenario = scenario.with_updates(scenario_updates) if scenario_updates else scenario
-    model = model.with_updates(params) if params else model
+    model = model.with_updates(params).require_consistent() if params else model
     model = model.with_effects(**effect_switches) if effect_switches else model
     return model, scenario
 

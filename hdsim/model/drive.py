@@ -214,6 +214,15 @@ class HarmonicDrive:
         """The five slots, family name to effect."""
         return {slot: getattr(self, slot) for slot in SLOTS}
 
+    def require_consistent(self) -> "HarmonicDrive":
+        """This drive, or InputError naming the first effect whose values contradict each other
+        (`Effect.inconsistency`): for the values a user gives (``--set``, a study's ranges)."""
+        for slot in SLOTS:
+            reason = getattr(self, slot).inconsistency()
+            if reason:
+                raise InputError(reason)
+        return self
+
     def active_families(self) -> list[str]:
         """Families whose slot holds an effect other than "none"."""
         return [slot for slot in SLOTS if not getattr(self, slot).is_null]

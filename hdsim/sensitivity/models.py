@@ -91,7 +91,7 @@ def _refuse_unbuildable_ends(drive, problem, dotted: list) -> None:
             continue
         for value in (low, high):
             try:
-                drive.with_updates({key: value})
+                drive.with_updates({key: value}).require_consistent()
             except InputError as exc:
                 raise InputError(f"the range of {name} reaches {value:g}, a drive the model refuses: {exc}") from None
 

@@ -250,7 +250,8 @@ class ScenarioMetric:
         return max(own, gap) if self.evaluator == "quasistatic" else own
 
     def _model(self, X):
-        return as_drive(self.drive).with_updates({n: X[:, j] for j, n in enumerate(self.names)})
+        # a row whose values contradict each other (T1 above T2) is refused like one out of bounds
+        return as_drive(self.drive).with_updates({n: X[:, j] for j, n in enumerate(self.names)}).require_consistent()
 
     def _valid(self, row) -> bool:
         try:

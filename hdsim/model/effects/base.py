@@ -100,6 +100,12 @@ class Effect(Parameters, FamilyKnowledge):
     def prefix(self) -> str:
         return self.family
 
+    def inconsistency(self) -> str:
+        """Why the values given together do not make this effect ('' when they do): the bounds of
+        each value alone are checked on construction; this is what relates them (a fit's trial
+        models may pass through such values, so only what a user gives is refused by it)."""
+        return ""
+
     # ------------------------------------------------------------------ fit protocol
     def free_parameters(self, context: FitContext) -> tuple[FreeParameter, ...]:
         """The parameters a fit frees, with bounds and start values from ``context``.

@@ -116,6 +116,15 @@ class ThreeSegmentHardening(Hardening):
         from hdsim.model.effects import kernels
         return (kernels.smooth_three_segment_spring,), parameter_rows(size, *self._args(c_struct, c_mesh))
 
+    def inconsistency(self) -> str:
+        T1, T2 = np.asarray(self.T1, dtype=float), np.asarray(self.T2, dtype=float)
+        bad = np.atleast_1d(T1 >= T2)
+        if not bad.any():
+            return ""
+        k = int(np.argmax(bad))
+        return (f"hardening.T1 = {np.atleast_1d(T1)[k]:g} must be below hardening.T2 = {np.atleast_1d(T2)[k]:g} "
+                "N·m (more teeth engage at the second breakpoint)")
+
     def free_parameters(self, context: FitContext):
         t = context.max_torque
         return (FreeParameter("T1", MIN_FIRST_BREAKPOINT * t, np.inf, 0.15 * t),
