@@ -35,9 +35,13 @@ def test_second_order_evaluations_and_s2(capsys):
 
 def test_out_writes_study_summary_and_figures(tmp_path, capsys, png_image):
     study = tmp_path / "g.h5"
-    out = _json(capsys, ["sobol", "--function", "gfunction", "--n", "256", "--workers", "1",
-                         "--out", str(study), "--json"])
+    assert main(["sobol", "--function", "gfunction", "--n", "256", "--workers", "1", "--out", str(study),
+                 "--json"]) == 0
+    printed = capsys.readouterr()
+    out = json.loads(printed.out)
     assert out["study"] == str(study) and study.exists()
+    # it says what it wrote, as `hdsim simulate` does
+    assert f"wrote {study}, {tmp_path / 'g.json'}, {tmp_path / 'g_indices.png'}" in printed.err
     summary = json.loads((tmp_path / "g.json").read_text())
     assert summary["S1"] == out["S1"]
     assert set(summary["figures"]) == {str(tmp_path / "g_indices.png"), str(tmp_path / "g_convergence.png")}

@@ -14,6 +14,7 @@ Examples::
 from __future__ import annotations
 
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -218,6 +219,9 @@ def _write_outputs(args, summary, result, analytic, target) -> None:
                                      result.convergence, target, analytic))
     summary["figures"] = [str(f) for f in figs]
     write_text_atomic(folder / summary_name, json.dumps(summary, indent=1, allow_nan=False))
+    # as `hdsim simulate` says what it wrote (on stderr: stdout may be the JSON)
+    written = ([args.out] if args.out else []) + [str(folder / summary_name)] + summary["figures"]
+    print(f"wrote {', '.join(written)}", file=sys.stderr)
 
 
 def _print_table(s) -> None:
