@@ -360,6 +360,10 @@ def read_hdf5(path: str, columns: dict[str, str] | None, options: ImportOptions 
                          "dataset per column") from None
     with handle:
         meta = {str(k): _attr_text(v) for k, v in handle.attrs.items()}
+        if "test" not in meta and {"hdsim_version", "scenario"} <= set(meta):
+            raise where.fail(f"this is an hdsim result file (the {meta['scenario']} scenario run by hdsim "
+                             "simulate), not a bench record; hdsim.read_run reads it, and docs/measurements.md "
+                             "shows how to turn a run into a record")
         keys, origin = _with_options(meta, {k: f"attribute '{k}': " for k in meta}, options)
         test, ratio, rated = interpret_meta(keys, where, origin)
         # Groups (e.g. provenance) are not columns; only root datasets are.
