@@ -20,6 +20,7 @@ print(run.metric("lost_motion_arcmin"))
 | `Run`, `read_run` | a finished run (`.metric`, `.save`) and reading one back |
 | `sobol` | Sobol' indices of a metric with respect to parameters of any drive |
 | `load_measurement` | a bench measurement file (CSV or HDF5) |
+| `measurement_from_run` | a run of hdsim's own as a bench record (closing the loop simulate → fit) |
 | `fit`, `diagnose` | fit a model to a measurement; find the effects it lacks, with the data checks, the outcome, the next measurement and the report |
 
 `import hdsim` stays light: each name is imported from its module the first time it
@@ -44,6 +45,7 @@ _EXPORTS = {
     "read_run": "hdsim.scenarios.run",
     "sobol": "hdsim.sensitivity.api",
     "load_measurement": "hdsim.io.measurement",
+    "measurement_from_run": "hdsim.io.measurement",
     "fit": "hdsim.identification.workflow",
     "diagnose": "hdsim.identification.workflow",
 }
@@ -52,7 +54,7 @@ __all__ = ["__version__", *_EXPORTS]
 
 if TYPE_CHECKING:  # type checkers and IDEs see the real signatures
     from hdsim.identification.workflow import diagnose, fit
-    from hdsim.io.measurement import load_measurement
+    from hdsim.io.measurement import load_measurement, measurement_from_run
     from hdsim.model.catalog import load_unit
     from hdsim.model.drive import HarmonicDrive
     from hdsim.scenarios.run import Run, read_run, run_scenario

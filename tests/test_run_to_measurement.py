@@ -12,7 +12,7 @@ from hdsim.errors import InputError
 def test_a_simulated_stiffness_test_fitted_gives_the_drives_stiffness_back(tmp_path):
     drive = hdsim.load_unit("CSG-25-100").without("friction", "backlash", "damping")
     run = hdsim.run_scenario(drive, "stiffness", evaluator="quasistatic")
-    record = run.to_measurement(noise_rad=1e-6, seed=1)
+    record = hdsim.measurement_from_run(run, noise_rad=1e-6, seed=1)
     assert record.test == "stiffness" and len(record) == np.size(run.result.t)
     fitted = hdsim.fit(record, "hardening")
     again = hdsim.run_scenario(fitted.drive, "stiffness", evaluator="quasistatic")
@@ -26,7 +26,7 @@ def test_a_simulated_stiffness_test_fitted_gives_the_drives_stiffness_back(tmp_p
 
 def test_a_driven_run_is_a_kinematic_error_record_whose_error_is_the_runs(short_ke_run):
     run = short_ke_run
-    record = run.to_measurement()
+    record = hdsim.measurement_from_run(run)
     assert record.test == "kinematic_error" and record.ratio == pytest.approx(100.0)
     out, wg = np.ravel(run.result.signals["output_angle_rad"]), np.ravel(run.result.signals["wg_angle_rad"])
     np.testing.assert_allclose(record.kinematic_error, out - wg / 100.0, atol=1e-15)

@@ -67,6 +67,7 @@ from hdsim.units import ANGLE_UNITS
 
 __all__ = [
     "Measurement",
+    "measurement_from_run",
     "TESTS",
     "ANGLE_UNITS",
     "load_measurement",
@@ -375,3 +376,49 @@ def save_measurement(meas: Measurement, path: str | os.PathLike) -> Path:
         table = np.column_stack(list(cols.values())).tolist()
         out.write("".join(",".join(map(repr, row)) + "\n" for row in table))
     return path
+
+
+def measurement_from_run(run, sample: int = 0, noise_rad: float = 0.0, seed: int = 0) -> Measurement:
+    """The run as a bench record, for closing the loop simulate → fit: a stiffness test of
+    a locked bench (torque and twist), a kinematic-error test of a driven one (load torque,
+    output and wave-generator angles).
+
+    Parameters
+    ----------
+    run : hdsim.scenarios.run.Run
+        A finished run (`hdsim.run_scenario`, `hdsim.read_run`).
+    sample : int
+        Which model of a batch.
+    noise_rad : float
+        Rms of white noise added to the measured angle [rad]: an encoder's. A record
+        without noise is the evaluator's own error, which the diagnosis says it cannot
+        judge below (docs/measurements.md).
+    seed : int
+        Seed of the noise.
+
+    Returns
+    -------
+    hdsim.io.measurement.Measurement
+
+    Raises
+    ------
+    InputError
+        A bench that gives no such record.
+    """
+
+    def signal(name):
+        return np.asarray(run.result.signals[name], dtype=float).reshape(-1, np.size(run.result.t))[sample]
+
+    t = np.asarray(run.result.t, dtype=float)
+    noise = noise_rad * np.random.default_rng(seed).standard_normal(t.size) if noise_rad else 0.0
+    params = run.model.params()
+    rated = float(np.ravel(params["drive.rated_torque"])[sample % np.size(params["drive.rated_torque"])])
+    if run.scenario.setup == "locked_wave_generator":
+        return make_measurement("stiffness", t, signal("torque_Nm"), signal("twist_rad") + noise,
+                                rated_torque=rated)
+    if run.scenario.setup == "driven_wave_generator":
+        ratio = float(np.ravel(params["drive.ratio"])[sample % np.size(params["drive.ratio"])])
+        return make_measurement("kinematic_error", t, signal("load_torque_Nm"), signal("output_angle_rad") + noise,
+                                wg_angle=signal("wg_angle_rad"), ratio=ratio, rated_torque=rated)
+    raise InputError(f"a {run.scenario.setup} run gives no bench record")
+

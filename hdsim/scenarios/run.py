@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from hdsim._version import __version__
-from hdsim.errors import InputError, unknown_name
+from hdsim.errors import unknown_name
 from hdsim.model.drive import HarmonicDrive
 from hdsim.scenarios.evaluator import choose_evaluator
 from hdsim.scenarios.registry import get_setup
@@ -46,49 +46,6 @@ class Run:
     def metric(self, name: str, sample: int = 0) -> float:
         """One metric of one sample of the batch, as a float (units in its name)."""
         return float(np.asarray(self.metrics[name]).reshape(-1)[sample])
-
-    def to_measurement(self, sample: int = 0, noise_rad: float = 0.0, seed: int = 0):
-        """The run as a bench record, for closing the loop simulate → fit: a stiffness test of
-        a locked bench (torque and twist), a kinematic-error test of a driven one (load torque,
-        output and wave-generator angles).
-
-        Parameters
-        ----------
-        sample : int
-            Which model of a batch.
-        noise_rad : float
-            Rms of white noise added to the measured angle [rad]: an encoder's. A record
-            without noise is the evaluator's own error, which the diagnosis says it cannot
-            judge below (docs/measurements.md).
-        seed : int
-            Seed of the noise.
-
-        Returns
-        -------
-        hdsim.io.measurement.Measurement
-
-        Raises
-        ------
-        InputError
-            A bench that gives no such record.
-        """
-        from hdsim.io.measurement import make_measurement
-
-        def signal(name):
-            return np.asarray(self.result.signals[name], dtype=float).reshape(-1, np.size(self.result.t))[sample]
-
-        t = np.asarray(self.result.t, dtype=float)
-        noise = noise_rad * np.random.default_rng(seed).standard_normal(t.size) if noise_rad else 0.0
-        params = self.model.params()
-        rated = float(np.ravel(params["drive.rated_torque"])[sample % np.size(params["drive.rated_torque"])])
-        if self.scenario.setup == "locked_wave_generator":
-            return make_measurement("stiffness", t, signal("torque_Nm"), signal("twist_rad") + noise,
-                                    rated_torque=rated)
-        if self.scenario.setup == "driven_wave_generator":
-            ratio = float(np.ravel(params["drive.ratio"])[sample % np.size(params["drive.ratio"])])
-            return make_measurement("kinematic_error", t, signal("load_torque_Nm"), signal("output_angle_rad") + noise,
-                                    wg_angle=signal("wg_angle_rad"), ratio=ratio, rated_torque=rated)
-        raise InputError(f"a {self.scenario.setup} run gives no bench record")
 
     def save(self, path) -> Path:
         """Write this run to an HDF5 run file, atomically.
