@@ -166,20 +166,22 @@ def test_an_empty_table_or_list_is_left_out_whatever_iterable_holds_it():
 def test_the_summary_never_says_none_needed_beside_an_open_question():
     # a near tie decided by its score keeps the measurement that would settle it, and a
     # result that is not a success says "—", not "none needed" (the page had said both)
-    from pathlib import Path
-
-    import hdsim
+    from hdsim.identification.outcome import assess
     from hdsim.identification.report_page import Page, _summary_box
+    from hdsim.identification.test_kinds import test_kind
 
-    def box(d):
+    kind = test_kind("stiffness")
+    tie = {"families": ["friction", "hardening"], "scores": [-0.44, -0.40], "round": 1, "added": True,
+           "measurement": "unloading from several peak torques"}
+    found = {"success": True, "added": ["friction"], "ranking": [], "ambiguous": [tie]}
+    assert assess(found, {"rows": 300}, kind) == ("found", "unloading from several peak torques")
+
+    def box(outcome, next_measurement):
         page = Page("t")
-        _summary_box(page, d.to_json(), d.kind)
+        _summary_box(page, {"outcome": outcome, "added": ["damping"], "next_measurement": next_measurement,
+                            "whiteness": {"noise_floor_rad": 1e-6}, "baseline": {"rmse_rad": 2e-5},
+                            "final": {"rmse_rad": 3e-6}}, kind)
         return page.markdown()
 
-    d = hdsim.diagnose(Path(__file__).parent / "data" / "stiffness_example.csv")
-    tie = next(a for a in d.to_json()["ambiguous"] if a["added"])
-    assert d.outcome == "found" and d.next_measurement == tie["measurement"]
-    assert f"| next measurement | {tie['measurement']} |" in box(d)
-    left = hdsim.diagnose(Path(__file__).parents[1] / "docs" / "figures" / "tutorial_bench.csv", "friction")
-    assert left.outcome == "improved" and left.next_measurement == ""
-    assert "| next measurement | — |" in box(left)
+    assert "| next measurement | — |" in box("improved", "")
+    assert "| next measurement | none needed |" in box("found", "")

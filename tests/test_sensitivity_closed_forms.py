@@ -127,6 +127,16 @@ def test_a_study_of_an_output_below_the_simulators_resolution_is_flagged():
     assert metric.resolution(np.array([42.0, 43.0])) == pytest.approx(STUDY_SOLVER.rtol * 42.5)
 
 
+def test_a_quasistatic_outputs_resolution_is_at_least_its_distance_from_the_dynamic_model():
+    from hdsim.sensitivity.scenario_outputs import ScenarioMetric
+
+    metric = ScenarioMetric("CSG-25-100", ("flexspline.h_pz",), "transmission_accuracy_arcsec", "kinematic_error",
+                            evaluator="quasistatic", choice={"figures": {"quasistatic_gap": 0.007}})
+    assert metric.resolution(np.array([42.49, 42.50])) == pytest.approx(0.007)  # not 1e-6 × 42.5
+    assert metric.resolution(np.array([4e4, 4.2e4])) == pytest.approx(1e-6 * 4.1e4)
+
+
+@pytest.mark.slow
 def test_a_quasistatic_study_that_varies_less_than_the_evaluators_distance_from_the_dynamic_model_is_flagged():
     # the transmission accuracy moves by ~0.002 arcsec over a ±10 % box, through the
     # quasi-static evaluator by ten times the dynamic model's change and the other way: its

@@ -15,8 +15,8 @@ import hdsim
 from hdsim.io.measurement import make_measurement
 
 
-def test_a_noise_free_simulated_stiffness_test_is_diagnosed_and_says_what_it_could_not_judge():
-    run = hdsim.run_scenario(hdsim.load_unit("CSG-25-100"), "stiffness")  # solve_ivp, as `hdsim simulate`
+def test_a_noise_free_simulated_stiffness_test_is_diagnosed_and_says_what_it_could_not_judge(default_stiffness_run):
+    run = default_stiffness_run  # the default unit through solve_ivp, as `hdsim simulate` runs it
     r = run.result
     rated = float(np.ravel(run.model.params()["drive.rated_torque"])[0])
     record = make_measurement("stiffness", np.asarray(r.t), np.ravel(r.signal("torque_Nm")),

@@ -239,15 +239,21 @@ class ScenarioMetric:
         solver's relative tolerance (`STUDY_SOLVER`) of the outputs' mean magnitude, or a
         millionth of it through the quasi-static evaluator (Newton to 1e-9 of the torque),
         and then at least the quasi-static evaluator's distance from the dynamic model on
-        the nominal drive (``choice["figures"]["quasistatic_gap"]``, `model_function`): the
-        inertia it leaves out moves across the box by as much. A study whose outputs vary
-        less than ten times this says so (`resolution_flags`)."""
+        the nominal drive (`_quasistatic_gap`, measured once, when the study is analysed, and
+        kept in ``choice["figures"]["quasistatic_gap"]``): the inertia it leaves out moves
+        across the box by as much. A study whose outputs vary less than ten times this says
+        so (`resolution_flags`)."""
         finite = np.asarray(y, dtype=float)
         finite = finite[np.isfinite(finite)]
         relative = 1e-6 if self.evaluator == "quasistatic" else STUDY_SOLVER.rtol
         own = relative * float(np.mean(np.abs(finite))) if finite.size else 0.0
-        gap = ((self.choice or {}).get("figures") or {}).get("quasistatic_gap", 0.0)
-        return max(own, gap) if self.evaluator == "quasistatic" else own
+        if self.evaluator != "quasistatic":
+            return own
+        figures = self.choice.setdefault("figures", {}) if self.choice is not None else {}
+        if "quasistatic_gap" not in figures:
+            figures["quasistatic_gap"] = _quasistatic_gap(_single(as_drive(self.drive)), load_scenario(self.scenario),
+                                                          self.output)
+        return max(own, figures["quasistatic_gap"])
 
     def _model(self, X):
         # a row whose values contradict each other (T1 above T2) is refused like one out of bounds
@@ -395,8 +401,6 @@ def model_function(drive, names, output: str, scenario=None, evaluator: str = "a
     choice = choose_evaluator(get_setup(resolved.setup), model, resolved, evaluator)
     if not (isinstance(scenario, str) and METRIC_SCENARIOS.get(output) == scenario):
         _check_output(model, resolved, output, choice.chosen)
-    if choice.chosen == "quasistatic":
-        choice.figures["quasistatic_gap"] = _quasistatic_gap(model, resolved, output)
     # a unit given by name travels by name: workers load it from their own cache
     return ScenarioMetric(drive if isinstance(drive, str) else model,
                           tuple(resolve_names(model, names)), output, resolved,
