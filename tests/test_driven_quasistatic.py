@@ -154,3 +154,6 @@ def test_a_transmission_accuracy_study_from_the_command_line_runs_quasi_statical
     assert choice["requested"] == "auto" and choice["chosen"] == "quasistatic"
     assert choice["figures"]["ripple_ratio"] < 0.01 and "prescribed" in choice["reason"]
     assert summary["evaluations"] == 16 * (1 + 2) and not summary["failures"]
+    # the evaluator's distance from solve_ivp (~0.007 arcsec) is more than the output moves: flagged
+    assert 1e-3 < choice["figures"]["quasistatic_gap"] < 0.05
+    assert any("the simulator's resolution" in flag for flag in summary["checks"]["flags"])
