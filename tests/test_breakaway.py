@@ -94,9 +94,18 @@ def test_a_breakaway_labelled_stiffness_is_the_wrong_test_and_a_locked_record_is
 def test_cli_fit_json_gives_the_contract_metrics_beside_the_catalog(tmp_path, cli):
     cols, meta, tr = tb.make_breakaway_data(("asymmetry",), seed=2, torque_side="output")
     tb.write_csv(tmp_path / "ramp.csv", cols, meta)
-    code, out, err = cli("fit", "ramp.csv", "--json", cwd=tmp_path)
+    code, out, err = cli("fit", "ramp.csv", "--json", "--report", "fitrep", cwd=tmp_path)
     assert code == 0, err
     metrics = json.loads(out)["metrics"]
+    # the page gives each direction's measured starting torque with its uncertainty (it gave
+    # only the fitted level, which is neither direction)
+    page = (tmp_path / "fitrep" / "index.md").read_text()
+    from hdsim.identification.report_page import rounded
+
+    for way in ("forward", "reverse"):
+        shown = rounded(metrics[f"starting_torque_{way}_Nm"], metrics[f"starting_torque_{way}_uncertainty_Nm"])
+        assert f"| {way} | {shown} |" in page
+    assert "## Starting torque, measured (the file's shaft)" in page
     for way in ("forward", "reverse"):
         assert metrics[f"starting_torque_{way}_Nm"] == pytest.approx(tr[f"starting_torque_{way}_Nm"], rel=0.1)
     # the catalog's starting torque of the default unit, referred to the output shaft of the file

@@ -339,8 +339,24 @@ class BreakawayTest(RunningTorqueTest):
         return []  # the starting torque is measured, with its uncertainty, in its own section
 
     def report_sections(self, diagnosis, diagnosis_json):
-        rows = [(k, "—" if v is None else f"{v:.4g}") for k, v in diagnosis_json["metrics"].items()]
-        return [("Starting torque (the file's shaft)", (("figure", "value [N·m]"), rows))]
+        return _starting_torque_section(diagnosis_json["metrics"])
+
+    def fit_sections(self, result, summary):
+        return _starting_torque_section(summary["metrics"])
+
+
+def _starting_torque_section(metrics: dict) -> list:
+    """The measured starting torque of each direction with its uncertainty, as a page's table:
+    the figure a breakaway test is for (the fitted level is the model's, not the measurement)."""
+    from hdsim.identification.report_page import rounded  # the page's rounding, matplotlib-free
+
+    rows = []
+    for way in ("forward", "reverse"):
+        value = metrics.get(f"starting_torque_{way}_Nm")
+        sigma = metrics.get(f"starting_torque_{way}_uncertainty_Nm")
+        rows.append((way, "— (never started this way)" if value is None else rounded(value, sigma)))
+    return [("Starting torque, measured (the file's shaft)", (("direction", "value ± standard uncertainty [N·m]"),
+                                                             rows))]
 
 
 class BreakawaySession(RunningSession):

@@ -437,6 +437,8 @@ def fit_page(result, folder, summary: dict, kind, scale_numbers=None) -> Path:
         (f"rms [{unit}]", f"{summary[kind.error_key] * scale:.3g}" + (f" (noise floor {floor * scale:.3g})"
                                                                      if floor else ""))])
     _checks(page, summary)
+    for heading, (head, rows) in kind.fit_sections(result, summary):
+        page.heading(heading).table(head, rows)
     _parameters(page, summary, kind, result)
     _predictions(page, kind, result, scale_numbers)
     figures = [_residual_vs_time(meas, [("+".join(result.families) or "base", result)], folder, unit, scale)]

@@ -188,6 +188,11 @@ class TestKind:
         """The kind's tables of a diagnosis report: [(heading, (head, rows))]."""
         return []
 
+    def fit_sections(self, result, summary: dict) -> list:
+        """The kind's tables of a fit's page (``summary``: what ``hdsim fit --json`` prints of
+        ``result``): [(heading, (head, rows))]."""
+        return []
+
     #: the heading of a report's fitted-parameter table (a torque test names its shaft)
     parameters_heading: ClassVar[str] = "Fitted parameters"
     #: a long log of this test may keep one row in k (`hdsim.io.decimation`): its content is
