@@ -185,3 +185,16 @@ def test_the_summary_never_says_none_needed_beside_an_open_question():
 
     assert "| next measurement | — |" in box("improved", "")
     assert "| next measurement | none needed |" in box("found", "")
+
+
+def test_a_kinematic_error_fit_is_drawn_against_the_output_angle(tmp_path, png_image):
+    # it was drawn against the torque, a cloud for a driven record, captioned "loading and unloading"
+    from pathlib import Path
+
+    import hdsim
+    from hdsim.identification.report import twist_fit_figure
+
+    result = hdsim.fit(Path(__file__).parent / "data" / "ke_example.csv", "kinematic_error")
+    path, caption = twist_fit_figure(result, tmp_path)
+    png_image(path)
+    assert caption.startswith("Measured kinematic error against the output angle")

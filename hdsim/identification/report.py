@@ -152,6 +152,24 @@ def _loop_by_rate(v):
     return out_r, out_w
 
 
+def _kinematic_error_fit_figure(result, measured, model, folder) -> tuple[Path, str]:
+    """A driven record's fit: the kinematic error, measured and fitted, and the residual
+    against the output angle (against the torque, a driven record is a cloud: its load
+    hardly moves while the error runs through its orders)."""
+    meas = result.measurement
+    angle = np.degrees(np.asarray(meas.wg_angle, dtype=float) / meas.ratio)
+    fig = new_figure((7, 6))
+    top, bottom = fig.subplots(2, 1, sharex=True)
+    top.plot(angle, measured * ARCSEC_PER_RAD, ".", ms=2, color="0.6", label="measured")
+    top.plot(angle, model * ARCSEC_PER_RAD, "-", lw=1, label="model: " + ("+".join(result.families) or "base"))
+    top.set(ylabel="kinematic error − offset [arcsec]", title="measured vs fitted model")
+    top.legend(fontsize=8)
+    bottom.plot(angle, np.asarray(result.residual) * ARCSEC_PER_RAD, ".", ms=2)
+    bottom.set(xlabel="output angle [deg]", ylabel="residual [arcsec]")
+    return (save(fig, Path(folder) / "measured_vs_model.png"),
+            "Measured kinematic error against the output angle with the fitted model; below, the residual.")
+
+
 def twist_fit_figure(result, folder) -> tuple[Path, str]:
     """Measured angle against torque with the fitted model, and the residual against torque
     below it (loading and unloading apart): the figure of a twist fit's page."""
@@ -159,6 +177,8 @@ def twist_fit_figure(result, folder) -> tuple[Path, str]:
     T = np.asarray(meas.torque, dtype=float)
     measured = _x(meas) - result.offset
     model = result.prediction - (np.asarray(meas.wg_angle) / meas.ratio if meas.wg_driven else 0) - result.offset
+    if meas.wg_driven:
+        return _kinematic_error_fit_figure(result, measured, model, folder)
     fig = new_figure((7, 6))
     top, bottom = fig.subplots(2, 1, sharex=True)
     top.plot(T, measured * ARCSEC_PER_RAD, ".", ms=2, color="0.6", label="measured")
