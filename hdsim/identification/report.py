@@ -152,42 +152,31 @@ def _loop_by_rate(v):
     return out_r, out_w
 
 
-def _kinematic_error_fit_figure(result, measured, model, folder) -> tuple[Path, str]:
-    """A driven record's fit: the kinematic error, measured and fitted, and the residual
-    against the output angle (against the torque, a driven record is a cloud: its load
-    hardly moves while the error runs through its orders)."""
-    meas = result.measurement
-    angle = np.degrees(np.asarray(meas.wg_angle, dtype=float) / meas.ratio)
-    fig = new_figure((7, 6))
-    top, bottom = fig.subplots(2, 1, sharex=True)
-    top.plot(angle, measured * ARCSEC_PER_RAD, ".", ms=2, color="0.6", label="measured")
-    top.plot(angle, model * ARCSEC_PER_RAD, "-", lw=1, label="model: " + ("+".join(result.families) or "base"))
-    top.set(ylabel="kinematic error − offset [arcsec]", title="measured vs fitted model")
-    top.legend(fontsize=8)
-    bottom.plot(angle, np.asarray(result.residual) * ARCSEC_PER_RAD, ".", ms=2)
-    bottom.set(xlabel="output angle [deg]", ylabel="residual [arcsec]")
-    return (save(fig, Path(folder) / "measured_vs_model.png"),
-            "Measured kinematic error against the output angle with the fitted model; below, the residual.")
-
-
 def twist_fit_figure(result, folder) -> tuple[Path, str]:
     """Measured angle against torque with the fitted model, and the residual against torque
-    below it (loading and unloading apart): the figure of a twist fit's page."""
+    below it (loading and unloading apart): the figure of a twist fit's page. A driven
+    record's kinematic error is drawn against the output angle instead: against the torque
+    it is a cloud, its load hardly moving while the error runs through its orders."""
     meas = result.measurement
+    driven = meas.wg_driven
     T = np.asarray(meas.torque, dtype=float)
+    x = np.degrees(np.asarray(meas.wg_angle, dtype=float) / meas.ratio) if driven else T
     measured = _x(meas) - result.offset
-    model = result.prediction - (np.asarray(meas.wg_angle) / meas.ratio if meas.wg_driven else 0) - result.offset
-    if meas.wg_driven:
-        return _kinematic_error_fit_figure(result, measured, model, folder)
+    model = result.prediction - (np.asarray(meas.wg_angle) / meas.ratio if driven else 0) - result.offset
     fig = new_figure((7, 6))
     top, bottom = fig.subplots(2, 1, sharex=True)
-    top.plot(T, measured * ARCSEC_PER_RAD, ".", ms=2, color="0.6", label="measured")
-    top.plot(T, model * ARCSEC_PER_RAD, "-", lw=1, label="model: " + ("+".join(result.families) or "base"))
-    top.set(ylabel="angle − offset [arcsec]", title="measured vs fitted model")
+    top.plot(x, measured * ARCSEC_PER_RAD, ".", ms=2, color="0.6", label="measured")
+    top.plot(x, model * ARCSEC_PER_RAD, "-", lw=1, label="model: " + ("+".join(result.families) or "base"))
+    top.set(ylabel=("kinematic error" if driven else "angle") + " − offset [arcsec]", title="measured vs fitted model")
     top.legend(fontsize=8)
-    _by_direction(bottom, T, meas, result.residual)
-    bottom.set(xlabel="torque [N·m]", ylabel="residual [arcsec]")
-    bottom.legend(fontsize=8, markerscale=4)
-    return (save(fig, Path(folder) / "measured_vs_model.png"),
-            "Measured angle against torque with the fitted model; below, the residual, loading and unloading apart.")
+    if driven:
+        bottom.plot(x, np.asarray(result.residual) * ARCSEC_PER_RAD, ".", ms=2)
+    else:
+        _by_direction(bottom, T, meas, result.residual)
+        bottom.legend(fontsize=8, markerscale=4)
+    bottom.set(xlabel="output angle [deg]" if driven else "torque [N·m]", ylabel="residual [arcsec]")
+    caption = ("Measured kinematic error against the output angle with the fitted model; below, the residual."
+               if driven else "Measured angle against torque with the fitted model; below, the residual, loading "
+               "and unloading apart.")
+    return save(fig, Path(folder) / "measured_vs_model.png"), caption
 
