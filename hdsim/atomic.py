@@ -62,7 +62,7 @@ def atomic_path(target: str | os.PathLike):
         The temporary file to write to.
     """
     target = Path(target)
-    if target.exists() and not target.is_file() and not target.is_dir():
+    if is_special_file(target):
         # the rename would put a file where a device or pipe was (/dev/null, as root)
         raise OSError(errno.EINVAL, "not a regular file (a device, pipe or socket): a result is not written "
                       "over it", str(target))
@@ -88,6 +88,12 @@ def atomic_path(target: str | os.PathLike):
             # a write that failed (a full disk) names no file: the message names the result's
             raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from exc
         raise
+
+
+def is_special_file(path: Path) -> bool:
+    """Whether ``path`` is a device, a pipe or a socket (``/dev/null``): a result written beside
+    it and renamed over it would replace it with a regular file."""
+    return path.exists() and not path.is_file() and not path.is_dir()
 
 
 def _remove_orphans(target: Path) -> None:

@@ -11,7 +11,7 @@ import math
 import os
 from pathlib import Path
 
-from hdsim.atomic import check_writable_folder
+from hdsim.atomic import check_writable_folder, is_special_file
 from hdsim.errors import InputError, SolverError
 
 #: the pages a report folder holds (`hdsim.identification.report_page.Page.write`)
@@ -35,9 +35,8 @@ def refuse_overwriting_data(path, data, option: str) -> None:
 
 
 def refuse_special_file(path: Path, option: str) -> None:
-    """InputError when ``path`` is a device, a pipe or a socket (``/dev/null``): a result is
-    written beside it and renamed over it, which would replace the device with a file."""
-    if path.exists() and not path.is_file() and not path.is_dir():
+    """InputError when ``path`` is a device, a pipe or a socket (`hdsim.atomic.is_special_file`)."""
+    if is_special_file(path):
         raise InputError(f"{option}: {path} is not a regular file (a device, pipe or socket), and a result "
                          "replaces its file when written; give a file name (to keep nothing, leave the option out)")
 

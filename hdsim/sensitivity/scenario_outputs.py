@@ -279,8 +279,7 @@ class ScenarioMetric:
     def _evaluate(self, X) -> np.ndarray:
         scenario = load_scenario(self.scenario)
         try:
-            run = run_scenario(self._model(X), scenario, options=STUDY_SOLVER,
-                               samples_per_segment=STUDY_SAMPLES.get(scenario.name), evaluator=self.evaluator)
+            run = _study_run(self._model(X), scenario, self.evaluator)
         except SolverError:
             if len(X) == 1:
                 return np.array([np.nan])
@@ -328,6 +327,13 @@ class ScenarioSeries:
         return Y
 
 
+def _study_run(model: HarmonicDrive, scenario: Scenario, evaluator: str):
+    """A run as a study makes it: the study's solver options and output grid (`STUDY_SOLVER`,
+    `STUDY_SAMPLES`) through ``evaluator``."""
+    return run_scenario(model, scenario, options=STUDY_SOLVER, samples_per_segment=STUDY_SAMPLES.get(scenario.name),
+                        evaluator=evaluator)
+
+
 def _single(drive) -> HarmonicDrive:
     model = as_drive(drive)
     if model.batch_size != 1:
@@ -338,8 +344,7 @@ def _single(drive) -> HarmonicDrive:
 def _check_output(model: HarmonicDrive, scenario: Scenario, output: str, evaluator: str = "dynamic") -> None:
     """Run the nominal drive once, through the study's evaluator: a metric the scenario does
     not report is refused here, not after every row of the study has failed on it."""
-    run = run_scenario(model, scenario, options=STUDY_SOLVER,
-                       samples_per_segment=STUDY_SAMPLES.get(scenario.name), evaluator=evaluator)
+    run = _study_run(model, scenario, evaluator)
     if output not in run.metrics:
         raise unknown_name(f"output metric of scenario {scenario.name}", output, run.metrics)
 
@@ -414,8 +419,7 @@ def _quasistatic_gap(model: HarmonicDrive, scenario: Scenario, output: str) -> f
     values = []
     for evaluator in ("quasistatic", "dynamic"):
         try:
-            run = run_scenario(model, scenario, options=STUDY_SOLVER,
-                               samples_per_segment=STUDY_SAMPLES.get(scenario.name), evaluator=evaluator)
+            run = _study_run(model, scenario, evaluator)
         except SolverError:
             return 0.0
         values.append(float(np.asarray(run.metrics.get(output, np.nan)).reshape(-1)[0]))
