@@ -100,11 +100,11 @@ def test_cli_fit_json_gives_the_contract_metrics_beside_the_catalog(tmp_path, cl
     # the page gives each direction's measured starting torque with its uncertainty (it gave
     # only the fitted level, which is neither direction)
     page = (tmp_path / "fitrep" / "index.md").read_text()
-    from hdsim.identification.report_page import rounded
-
-    for way in ("forward", "reverse"):
-        shown = rounded(metrics[f"starting_torque_{way}_Nm"], metrics[f"starting_torque_{way}_uncertainty_Nm"])
-        assert f"| {way} | {shown} |" in page
+    for way in ("forward", "reverse"):  # read back from the page, not formatted by the page's own rounding
+        row = next(line for line in page.splitlines() if line.startswith(f"| {way} | "))
+        value, sigma = (float(x) for x in row.split("|")[2].split("±"))
+        assert value == pytest.approx(metrics[f"starting_torque_{way}_Nm"], rel=0.02)
+        assert sigma == pytest.approx(metrics[f"starting_torque_{way}_uncertainty_Nm"], rel=0.1)
     assert "## Starting torque, measured (the file's shaft)" in page
     for way in ("forward", "reverse"):
         assert metrics[f"starting_torque_{way}_Nm"] == pytest.approx(tr[f"starting_torque_{way}_Nm"], rel=0.1)
