@@ -56,6 +56,8 @@ import traceback
 import zlib
 from pathlib import Path
 
+import numpy as np
+
 HERE = Path(__file__).resolve().parent
 # this checkout's hdsim, whatever an editable install elsewhere points at; the zoo lives with the tests
 sys.path[:0] = [str(HERE.parent), str(HERE.parent / "tests"), str(HERE)]
@@ -89,8 +91,6 @@ def design(group: str, seed: int) -> dict:
     Deterministic: the profile kind rotates with the seed (offset by the group's place),
     forms and the drawn baseline come from a stream seeded by ``(seed, crc32(group))``.
     """
-    import numpy as np
-
     spec_hidden, spec_base = GROUPS[group]
     rng = np.random.default_rng([int(seed), zlib.crc32(group.encode())])
     pick = lambda fam: tz.FORMS[fam][int(rng.integers(len(tz.FORMS[fam])))]  # noqa: E731
@@ -146,12 +146,27 @@ def run_case(group: str, seed: int, max_rows: int | None = None) -> dict:
                        scores=[r.get("score") for r in j["ranking"]],
                        ambiguous=[a["families"] for a in j["ambiguous"]], outcome=outcome, next_measurement=nxt,
                        baseline_rmse_rad=j["baseline"]["rmse_rad"], final_rmse_rad=j["final"]["rmse_rad"],
-                       success=bool(j["success"]))
+                       success=bool(j["success"]), final_p_value=j["whiteness"]["p_value"],
+                       **residual_floors(report.steps[-1].fit.residual))
     except Exception as exc:  # a failed case, not a failed battery
         tail = traceback.format_exc().strip().splitlines()[-6:]
         row["error"] = f"{type(exc).__name__}: {exc}\n" + "\n".join(tail)
     row["seconds"] = round(time.perf_counter() - start, 2)
     return row
+
+
+def residual_floors(r) -> dict:
+    """Three estimates of the final residual's white-noise rms [rad]: ``std(Δr)/√2``, the
+    same from the median absolute first difference, and `hdsim.signals.noise_level` (a
+    local cubic's median residual); the last two are robust to the few rows where a
+    model's kink makes the residual jump."""
+    from hdsim.signals import noise_level
+
+    r = np.asarray(r, dtype=float)
+    d = np.diff(r)
+    return {"floor_std_rad": float(np.std(d) / np.sqrt(2.0)),
+            "floor_mad_rad": float(1.4826 * np.median(np.abs(d - np.median(d))) / np.sqrt(2.0)),
+            "floor_local_rad": noise_level(r)}
 
 
 # --------------------------------------------------------------------------- grading
