@@ -32,7 +32,7 @@ class WaveGenerator(Parameters):
 
     k_bearing: float = param("radial stiffness of the WG bearing per engagement zone", "N/m",
                              positive=True)
-    balls: float = param("ball count of the WG bearing", "-", 3, 200)
+    balls: float = param("ball count of the WG bearing", "-", 3, 200, count="balls")
     support_width: float = param("arc of the bore each ball holds through the bearing's outer race", "m",
                                  positive=True)
     engagement_fraction: float = param(

@@ -87,6 +87,7 @@ from hdsim.errors import InputError, unknown_name
 from hdsim.model import datasheet
 from hdsim.model.drive import HarmonicDrive
 from hdsim.model.geometry import FlexsplineGeometry
+from hdsim.model.parameters import not_whole
 from hdsim.units import arcmin_to_rad, rad_to_arcmin
 
 #: top-level keys: (unit, required, meaning); the datasheet figures in catalog order
@@ -143,8 +144,9 @@ def read_drive_file(path: str | os.PathLike) -> dict:
     ------
     InputError
         One line naming the file (and the key) for a missing file, malformed TOML, an
-        unknown key, a wrong type, a value that is not a positive finite number,
-        ``T1 >= T2`` or a stiffness that falls with load (K1 > K2 or K2 > K3).
+        unknown key, a wrong type, a value that is not a positive finite number, a ratio
+        whose 2N teeth are not a whole number, ``T1 >= T2`` or a stiffness that falls with
+        load (K1 > K2 or K2 > K3).
     """
     source = _label(path)
     try:
@@ -219,6 +221,9 @@ def check_table(table: dict, source: str) -> dict:
     out.update({key: _number(source, key, table[key]) for key in KEYS if key != "name" and key in table})
     if out["ratio"] < 1.0:
         raise InputError(f"{source}: ratio must be at least 1, got {out['ratio']:g}")
+    if not_whole(2.0 * out["ratio"]):  # the assumed proportions have 2N teeth (two-lobe wave generator)
+        raise InputError(f"{source}: ratio = {out['ratio']:g} means {2.0 * out['ratio']:g} flexspline teeth (2N), "
+                         "not a whole number; expected a ratio in steps of 0.5")
     if "flexspline" in table:
         dims = table["flexspline"]
         if not isinstance(dims, dict):

@@ -22,6 +22,7 @@ from dataclasses import dataclass, field, fields, replace
 import numpy as np
 
 from hdsim.errors import InputError
+from hdsim.model.parameters import not_whole, whole_count_message
 
 #: dedendum of the flexspline teeth in modules: the usual full-depth proportion
 #: (addendum 1 m, dedendum 1.25 m), which leaves a root clearance of 0.25 m
@@ -32,8 +33,11 @@ DEDENDUM_MODULES = 1.25
 PITCH_TOLERANCE = 0.05
 
 
-def _dim(doc: str, unit: str = "m", symbol: str = "", design: bool = False):
-    return field(metadata={"doc": doc, "unit": unit, "symbol": symbol, "design": design})
+def _dim(doc: str, unit: str = "m", symbol: str = "", design: bool = False, count: str = ""):
+    metadata = {"doc": doc, "unit": unit, "symbol": symbol, "design": design}
+    if count:  # what it counts (as `hdsim.model.parameters.param`): whole numbers only
+        metadata["count"] = count
+    return field(metadata=metadata)
 
 
 @dataclass(frozen=True)
@@ -52,7 +56,7 @@ class FlexsplineGeometry:
     t_d: float = _dim("diaphragm thickness")
     r_hub: float = _dim("outer radius of the rigid hub (inner edge of the diaphragm)")
     module: float = _dim("gear module m")
-    teeth: float = _dim("flexspline tooth count z_fs", unit="-")
+    teeth: float = _dim("flexspline tooth count z_fs", unit="-", count="teeth")
     pressure_angle: float = _dim("pressure angle of the tooth flanks α", unit="rad")
     E: float = _dim("Young's modulus", unit="Pa")
     nu: float = _dim("Poisson's ratio", unit="-")
@@ -201,8 +205,7 @@ def validate_geometry(g: FlexsplineGeometry) -> None:
         (g.R_k >= g.R_c - g.r_hub,
          lambda i: f"end radius R_k = {fmt(g.R_k, i)} does not fit between hub and cylinder "
                    f"({fmt(g.R_c - g.r_hub, i)} available)"),
-        (np.abs(g.teeth - np.round(g.teeth)) > 1e-9 * g.teeth,
-         lambda i: f"flexspline.teeth = {_at(g.teeth, i):g} must be a whole number of teeth"),
+        (not_whole(g.teeth), lambda i: whole_count_message("flexspline.teeth", _at(g.teeth, i), "teeth")),
         (np.abs(0.5 * g.module * g.teeth - g.pitch_radius) > PITCH_TOLERANCE * g.pitch_radius,
          lambda i: f"module × teeth / 2 = {fmt(0.5 * g.module * g.teeth, i)} must be the pitch radius "
                    f"R_i + h_pz + {DEDENDUM_MODULES:g} module = {fmt(g.pitch_radius, i)} (within "

@@ -19,7 +19,7 @@ from hdsim.errors import InputError
 
 
 def param(doc: str, unit: str, lower: float = 0.0, upper: float = np.inf, positive: bool = False,
-          default=MISSING):
+          default=MISSING, count: str = ""):
     """A numeric parameter field with its unit and physical bounds.
 
     Parameters
@@ -34,9 +34,35 @@ def param(doc: str, unit: str, lower: float = 0.0, upper: float = np.inf, positi
         Zero is excluded as well (``lower`` is then only the display bound).
     default : float, optional
         Makes the parameter optional in scenario and fitted-model files.
+    count : str, optional
+        What the parameter counts (``"balls"``): it then takes whole numbers only
+        (`not_whole`) and is no input of a Sobol study.
     """
-    return field(default=default,
-                 metadata={"doc": doc, "unit": unit, "bounds": (lower, upper), "positive": positive})
+    metadata = {"doc": doc, "unit": unit, "bounds": (lower, upper), "positive": positive}
+    if count:  # only on counts: the other parameters' metadata stays as the docs print it
+        metadata["count"] = count
+    return field(default=default, metadata=metadata)
+
+
+def not_whole(value) -> np.ndarray:
+    """Where a count is not a whole number: a boolean array of ``value``'s shape.
+
+    A relative slack of 1e-9 lets through a count computed in floats (the teeth of a
+    drive, 2 × ratio) and nothing a person types (200.5, 22.000001).
+    """
+    value = np.asarray(value, dtype=float)
+    return np.abs(value - np.round(value)) > 1e-9 * np.abs(value)
+
+
+def whole_count_message(name: str, value: float, what: str) -> str:
+    """The refusal of a count that is not whole, the same at every edge it enters by."""
+    return f"{name} = {value:g} must be a whole number of {what}"
+
+
+@functools.lru_cache(maxsize=None)
+def count_fields(cls) -> tuple[tuple[str, str], ...]:
+    """(name, what it counts) of the numeric fields of ``cls`` that are counts (``param(..., count=...)``)."""
+    return tuple((f.name, f.metadata["count"]) for f in fields(cls) if f.metadata.get("count"))
 
 
 def _as_float_array(owner: str, name: str, value) -> np.ndarray:
@@ -100,6 +126,12 @@ class Parameters:
                                  + (f" {unit}" if unit not in ("", "-") else ""))
             if not isinstance(raw, int):  # a given int stays as written
                 object.__setattr__(self, name, float_if_scalar(raw))
+        for name, what in count_fields(type(self)):
+            value = getattr(self, name)
+            bad = np.atleast_1d(not_whole(value))
+            if bad.any():
+                first = float(np.atleast_1d(value)[np.argmax(bad)])
+                raise InputError(whole_count_message(f"{self.prefix}.{name}", first, what))
 
     def params(self) -> dict:
         """Every numeric field by name."""

@@ -172,11 +172,30 @@ def resolve_names(drive, names) -> list[str]:
             resolved.append(f"flexspline.{name}")
         else:
             raise unknown_name("parameter", name, list(known) + sorted(design))
+    _refuse_counts(as_drive(drive), resolved)
     twice = sorted({n for n in resolved if resolved.count(n) > 1})
     if twice:  # 'h_pz' and 'flexspline.h_pz': one input under two names, the second column overwrote the first
         given = ", ".join(repr(n) for n, r in zip(names, resolved) if r == twice[0])
         raise InputError(f"parameter {twice[0]} is named twice ({given}): a study varies each parameter once")
     return resolved
+
+
+def _refuse_counts(model: HarmonicDrive, dotted) -> None:
+    """InputError for a count (balls, teeth) among a study's inputs.
+
+    A Sobol' design draws real values across each range, and a count takes whole numbers
+    only: every row would be refused (20.5 balls is no bearing), and the study would end
+    with all its blocks dropped. Rounding the rows instead would study a staircase whose
+    steps carry weights set by where the range ends fall (a uniform 19.8-24.2, ±10 % of 22,
+    puts 16 % of the rows on 20 and 23 % on 21), with values in the study file that are
+    not the ones run. A count is compared at whole values: one run or one study per count.
+    """
+    for name in dotted:
+        what = model.param_info(name).get("count")
+        if what:
+            raise InputError(f"{name} is a count of {what} (whole numbers only), which a Sobol' study cannot "
+                             f"vary; compare whole counts instead (hdsim simulate --set {name}=VALUE, or a study per count of "
+                             f"drive.with_updates)")
 
 
 def nominal_values(drive, names) -> dict[str, float]:
