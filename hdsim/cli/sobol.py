@@ -232,6 +232,12 @@ def _print_table(s) -> None:
                 s["ST"][nm], s["ST_conf"][nm], s["ST_conf_replicates"][nm])
         print(f"{nm:>12} " + " ".join("     nan" if v is None else f"{v:8.4f}" for v in vals))
     print("checks: " + ("all pass" if s["checks"]["ok"] else "FAILED (see stderr)"))
+    reasons = s.get("failure_reasons")
+    if reasons:
+        failed = sum(r["rows"] for r in reasons)
+        more = f"; {len(reasons)} distinct reasons (failure_reasons in --json)" if len(reasons) > 1 else ""
+        print(f"failed rows: {failed}, blocks dropped: {s['blocks_dropped']}; first (sample {reasons[0]['first_row']}): "
+              f"{reasons[0]['reason']}{more}")
     choice = s.get("evaluator")
     if choice:
         print(f"evaluator: {choice['chosen']} ({choice['reason']})")

@@ -1,6 +1,9 @@
 """Evaluate a model on many input rows, locally or on any executor, by row index.
 
-``func`` is any picklable callable ``f(X: (n, d)) -> (n,)``. Rows go out in chunks;
+``func`` is any picklable callable ``f(X: (n, d)) -> (n,)``; one that returns NaN for a row
+it cannot evaluate may say why through a method ``func.explained(X) -> (y, {row: reason})``
+(the simulator's refused geometry or solver failure), which the study keeps as the row's
+failure message in place of "non-finite output". Rows go out in chunks;
 each finished chunk comes back with its row positions, a fingerprint of the inputs
 the worker saw, and the per-row failures, and is written into preallocated arrays
 *by index* — never concatenated in completion order, which silently breaks Sobol'
@@ -63,20 +66,29 @@ def run_chunk(func, x):
     x = np.ascontiguousarray(x, dtype=np.float64)
     key, errors, n = fingerprint(x), {}, len(x)
     try:
-        y = _call(func, x)
+        y, reasons = _call(func, x)
         count = n
     except Exception:  # noqa: BLE001 - any model failure is data, not a crash
         # One bad row must not take its neighbours down: retry row by row.
-        y, count = np.full(n, np.nan), n
+        y, reasons, count = np.full(n, np.nan), {}, n
         for i in range(n):
             count += 1
             try:
-                y[i] = _call(func, x[i:i + 1])[0]
+                row, reason = _call(func, x[i:i + 1])
+                y[i] = row[0]
+                if 0 in reason:
+                    reasons[i] = reason[0]
             except Exception as exc:  # noqa: BLE001
-                errors[i] = f"{_error_name(exc)}: {exc}".splitlines()[0][:300]
+                errors[i] = _one_line(f"{_error_name(exc)}: {exc}")
     for i in np.flatnonzero(~np.isfinite(y)):
-        errors.setdefault(int(i), f"non-finite output ({y[i]})")
+        i = int(i)
+        errors.setdefault(i, _one_line(reasons[i]) if i in reasons else f"non-finite output ({y[i]})")
     return y, key, errors, count
+
+
+def _one_line(text: str) -> str:
+    """A failure's message as a study stores it: its first line, at most 300 characters."""
+    return str(text).splitlines()[0][:300] if str(text) else ""
 
 
 def _error_name(exc: BaseException) -> str:
@@ -90,10 +102,14 @@ def _error_name(exc: BaseException) -> str:
 
 
 def _call(func, x):
-    y = np.asarray(func(x), dtype=np.float64).reshape(-1)
+    """``(y, {row: reason})``: the model's outputs, and why a row came back NaN where the
+    model can say (`explained`)."""
+    explained = getattr(func, "explained", None)
+    y, reasons = explained(x) if callable(explained) else (func(x), {})
+    y = np.asarray(y, dtype=np.float64).reshape(-1)
     if y.shape != (len(x),):
         raise ValueError(f"model returned {y.size} values for {len(x)} rows")
-    return y
+    return y, reasons
 
 
 def default_chunksize(n_rows: int) -> int:

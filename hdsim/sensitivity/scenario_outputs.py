@@ -11,8 +11,9 @@ runs, `hdsim.simulation.driven_quasistatic.criterion`).
 The drive is any `HarmonicDrive` (a built-in unit, a modified or a fitted one)
 or the name of a built-in unit; the scenario is a built-in name, a scenario file or a
 `Scenario`. Both travel to the workers inside the callable (they pickle). Rows whose
-geometry is impossible, or on which the solver fails, come back NaN; the sensitivity
-layer then drops their block and names them.
+geometry is impossible, or on which the solver fails, come back NaN, with the reason
+(`ScenarioMetric.explained`); the sensitivity layer then drops their block and names
+them with it.
 """
 
 from __future__ import annotations
@@ -246,12 +247,22 @@ class ScenarioMetric:
     choice: dict | None = None
 
     def __call__(self, X: ArrayLike) -> np.ndarray:
+        return self.explained(X)[0]
+
+    def explained(self, X: ArrayLike) -> tuple[np.ndarray, dict[int, str]]:
+        """``(y, {row: reason})``: the metric of each row, NaN for a row the model refuses
+        or the solver cannot run, with the reason (the study's failure message,
+        `hdsim.sensitivity.evaluate.run_chunk`)."""
         X = np.atleast_2d(np.asarray(X, dtype=float))
         y = np.full(len(X), np.nan)
-        valid = self._valid_rows(X)
+        reasons = {i: f"refused: {message}" for i, message in self._refusals(X).items()}
+        valid = np.ones(len(X), dtype=bool)
+        valid[list(reasons)] = False
         if valid.any():
-            y[valid] = self._evaluate(X[valid])
-        return y
+            rows = np.flatnonzero(valid)
+            y[valid], unsolved = self._evaluate(X[valid])
+            reasons.update({int(rows[j]): f"solver failed: {message}" for j, message in unsolved.items()})
+        return y, reasons
 
     def resolution(self, y) -> float:
         """The size of the simulator's own error on one output [unit of the output]: the
@@ -278,37 +289,48 @@ class ScenarioMetric:
         # a row whose values contradict each other (T1 above T2) is refused like one out of bounds
         return as_drive(self.drive).with_updates({n: X[:, j] for j, n in enumerate(self.names)}).require_consistent()
 
-    def _valid(self, row) -> bool:
+    def _refusal(self, row) -> str | None:
+        """Why the model refuses one row's values (None: it builds). Built from floats, so
+        the message names the values, not a sample of a batch of one."""
         try:
-            self._model(row[None, :])
-        except InputError:
-            return False
-        return True
+            as_drive(self.drive).with_updates({n: float(v) for n, v in zip(self.names, row)}).require_consistent()
+        except InputError as exc:
+            return str(exc)
+        return None
 
-    def _valid_rows(self, X) -> np.ndarray:
-        """Rows whose parameters build a model. The bound and geometry checks refuse a
-        batch when any row fails them, so one batch build clears a whole good chunk;
-        only a refused chunk is checked row by row."""
+    def _refusals(self, X) -> dict[int, str]:
+        """Row -> why the model refuses it. The bound and geometry checks refuse a batch
+        when any row fails them, so one batch build clears a whole good chunk; only a
+        refused chunk is checked row by row."""
         try:
             self._model(X)
         except InputError:
-            return np.array([self._valid(row) for row in X], dtype=bool)
-        return np.ones(len(X), dtype=bool)
+            refusals = {i: self._refusal(row) for i, row in enumerate(X)}
+            return {i: message for i, message in refusals.items() if message is not None}
+        return {}
 
-    def _evaluate(self, X) -> np.ndarray:
+    def _valid_rows(self, X) -> np.ndarray:
+        """Rows whose parameters build a model."""
+        valid = np.ones(len(X), dtype=bool)
+        valid[list(self._refusals(X))] = False
+        return valid
+
+    def _evaluate(self, X) -> tuple[np.ndarray, dict[int, str]]:
+        """``(metric of each row, {row: solver message})``, NaN where the solver failed."""
         scenario = load_scenario(self.scenario)
         try:
             run = _study_run(self._model(X), scenario, self.evaluator)
-        except SolverError:
+        except SolverError as exc:
             if len(X) == 1:
-                return np.array([np.nan])
+                return np.array([np.nan]), {0: str(exc)}
             # isolate the failing rows by halving; the others keep their values
             half = len(X) // 2
-            return np.concatenate([self._evaluate(X[:half]), self._evaluate(X[half:])])
+            (low, low_failed), (high, high_failed) = self._evaluate(X[:half]), self._evaluate(X[half:])
+            return np.concatenate([low, high]), {**low_failed, **{half + j: m for j, m in high_failed.items()}}
         if self.output not in run.metrics:
             raise unknown_name(f"output metric of scenario {scenario.name}", self.output,
                                run.metrics)
-        return np.asarray(run.metrics[self.output], dtype=float).reshape(-1)
+        return np.asarray(run.metrics[self.output], dtype=float).reshape(-1), {}
 
 
 @dataclass(frozen=True)

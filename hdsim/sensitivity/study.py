@@ -56,7 +56,8 @@ class StudyResult:
                "replicates": self.replicates, "second_order": self.second_order,
                "evaluated_now": self.evaluated_now,
                "blocks_used": a["blocks_used"], "blocks_dropped": a["blocks_dropped"],
-               "failures": self.failures, "checks": self.checks,
+               "failures": self.failures, "failure_reasons": failure_reasons(self.failures),
+               "checks": self.checks,
                "convergence": [_conv_json(row, names) for row in self.convergence]}
         if self.second_order:
             for key in ("S2", "S2_conf", "S2_conf_replicates"):
@@ -224,6 +225,18 @@ def _failure_records(store, n) -> list[dict]:
         records.append({"row": g, "replicate": r, "index": j, "block": j // store.k,
                         "params": {nm: float(v) for nm, v in zip(names, x)}, "message": msg})
     return records
+
+
+def failure_reasons(failures: list[dict]) -> list[dict]:
+    """Why rows failed, once per distinct message: ``{"reason", "rows", "first_row"}`` in the
+    order of each reason's first row (the study's JSON: a refused geometry or a solver
+    failure, without reading every row of ``failures``)."""
+    grouped: dict[str, dict] = {}
+    for record in failures:  # sorted by row (`_failure_records`)
+        entry = grouped.setdefault(record["message"], {"reason": record["message"], "rows": 0,
+                                                       "first_row": record["row"]})
+        entry["rows"] += 1
+    return list(grouped.values())
 
 
 def _report_failures(failures, store, log):
