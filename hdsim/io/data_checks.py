@@ -108,11 +108,36 @@ def _arcmin(x: float) -> str:
     return f"{math.degrees(x) * 60:.3g} arcmin" if abs(x) < math.radians(2) else f"{math.degrees(x):.3g}°"
 
 
-def _saturation(name: str, x) -> Check | None:
-    """A channel that sits at its extreme value for many samples: clipped or saturated."""
+def braked_rows(meas, torque) -> np.ndarray:
+    """Rows of a kinematic-error record whose torque opposes the output's motion: a brake
+    holding the load it is set to (the test turns the output "against a load that opposes
+    the motion", scenarios/kinematic_error.toml).
+
+    In the record's convention (a positive torque twists the output ahead, after
+    `torque_sign_convention`) a brake on a forward pass makes the output lag, so its torque
+    and the output's speed have opposite signs: T·ω < 0. A brake is torque-controlled, and a
+    noise-free or finely quantised torque then repeats its set value for the whole pass,
+    which is the load, not a clipped channel. The direction is that of the nominal output
+    angle (wave-generator angle / ratio) from row to row: no time step, no encoder noise.
+    """
+    T = np.asarray(torque, dtype=float)
+    if meas.test != "kinematic_error" or meas.wg_angle is None or not meas.ratio or T.size < 2:
+        return np.zeros(T.size, dtype=bool)
+    direction = np.sign(np.gradient(np.asarray(meas.wg_angle, dtype=float) / meas.ratio))
+    return T * direction < 0.0
+
+
+def _saturation(name: str, x, held=None) -> Check | None:
+    """A channel that sits at its extreme value for many samples: clipped or saturated.
+
+    ``held`` marks rows where an extreme value is the load as set (`braked_rows`), which do
+    not count; those same rows of a clipped reading of a brake cannot be told from it by
+    their values, and a kinematic-error row shows the drive in its angles either way.
+    """
     x = np.asarray(x, dtype=float)
+    held = np.zeros(x.size, dtype=bool) if held is None else held
     for value, end in ((np.max(x), "maximum"), (np.min(x), "minimum")):
-        at = x == value
+        at = (x == value) & ~held
         if np.count_nonzero(at) >= max(5, 0.01 * x.size) and np.ptp(x) > 0:
             return Check("saturation", "warn", f"the {name} sits at its {end} {value:.6g} for "
                          f"{np.count_nonzero(at)} rows ({100 * np.mean(at):.1f} %): clipped or saturated, "
@@ -176,8 +201,8 @@ def run_checks(meas, drive: DriveScale) -> tuple[list[Check], dict]:
         shown = ", ".join(f"{r:.3g}" for r in groups[:5])
         checks.append(Check("loading_rates", status, f"{len(groups)} distinct loading rate(s) "
                             f"({shown or 'none'} N·m/s){tail}"))
-    for name, x in (("torque", T), ("angle", meas.angle)):
-        found = _saturation(name, x)
+    for name, x, held in (("torque", T, braked_rows(meas, T)), ("angle", meas.angle, None)):
+        found = _saturation(name, x, held)
         if found:
             checks.append(found)
     floor = noise_level(_without_wg_orders(response, meas.wg_angle, meas.ratio) if ke else response, t)
