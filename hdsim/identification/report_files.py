@@ -1,0 +1,90 @@
+"""Which files of a report folder hdsim wrote: a manifest, so that a report written again
+into the folder removes the figures of the last one that it does not write again.
+
+A folder reused for a second report (another record, another test kind, a fit after a
+diagnosis) had kept the first report's figures beside the new page, where a reader takes
+them for the current result. Only files the previous manifest lists are removed, and only
+while they are still the files hdsim wrote (same size and modification time): a file of
+the user's, or one the user has since changed, stays.
+
+The manifest is ``.hdsim-report.json`` in the folder: ``{"format": "hdsim-report-files-1",
+"files": [{"name", "size", "mtime_ns"}, ...]}``, plain file names of the folder only.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+from hdsim.atomic import write_text_atomic
+
+MANIFEST = ".hdsim-report.json"
+FORMAT = "hdsim-report-files-1"
+
+
+def _stamp(path: Path) -> dict | None:
+    """``{"name", "size", "mtime_ns"}`` of a regular file, None for anything else."""
+    try:
+        st = path.stat()
+    except OSError:
+        return None
+    if not path.is_file():
+        return None
+    return {"name": path.name, "size": st.st_size, "mtime_ns": st.st_mtime_ns}
+
+
+def previous_files(folder: Path) -> list[dict]:
+    """The entries of the folder's manifest; none when it is missing or not one of ours (a
+    manifest edited by hand is no reason to remove anything). Only plain file names."""
+    try:
+        data = json.loads((folder / MANIFEST).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError):
+        return []
+    if not isinstance(data, dict) or data.get("format") != FORMAT or not isinstance(data.get("files"), list):
+        return []
+    out = []
+    for entry in data["files"]:
+        if not isinstance(entry, dict):
+            continue
+        name = entry.get("name")
+        if isinstance(name, str) and name and name not in (".", "..", MANIFEST) and Path(name).name == name \
+                and os.sep not in name and "/" not in name:
+            out.append(entry)
+    return out
+
+
+def stale_files(folder: Path, previous: list[dict], written: set[str]) -> list[Path]:
+    """Files of the previous report that this one did not write again and that are still as
+    hdsim left them (same size and modification time)."""
+    out = []
+    for entry in previous:
+        if entry["name"] in written:
+            continue
+        now = _stamp(folder / entry["name"])
+        if now is not None and now["size"] == entry.get("size") and now["mtime_ns"] == entry.get("mtime_ns"):
+            out.append(folder / entry["name"])
+    return out
+
+
+def replace_report_files(folder, written) -> list[Path]:
+    """After a report has written ``written`` (paths) into ``folder``: remove the previous
+    report's files it did not write again (`stale_files`), then record ``written`` as the
+    folder's manifest. Returns the files removed.
+
+    The manifest is replaced last: a report stopped between the two leaves the old
+    manifest, and the next report removes what it lists.
+    """
+    folder = Path(folder)
+    mine = [Path(p) for p in written if Path(p).resolve().parent == folder.resolve()]
+    names = {p.name for p in mine}
+    removed = []
+    for path in stale_files(folder, previous_files(folder), names):
+        try:
+            path.unlink()
+        except FileNotFoundError:
+            continue
+        removed.append(path)
+    stamps = [s for s in (_stamp(folder / name) for name in sorted(names)) if s is not None]
+    write_text_atomic(folder / MANIFEST, json.dumps({"format": FORMAT, "files": stamps}, indent=1) + "\n")
+    return removed
