@@ -7,7 +7,7 @@ from __future__ import annotations
 import json
 import os
 
-from hdsim.identification.report_files import MANIFEST
+from hdsim.io.report_files import MANIFEST
 from hdsim.identification.report_page import Page
 
 

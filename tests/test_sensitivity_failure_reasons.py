@@ -78,3 +78,14 @@ def test_the_reasons_reach_the_json_and_the_table_and_leave_every_index_as_it_wa
     _print_table(summary)
     assert (f"failed rows: {len(failed)}, blocks dropped: {summary['blocks_dropped']}; first (sample {failed[0]}): "
             "refused: a above 0.9") in capsys.readouterr().out.splitlines()
+
+
+def test_refusals_that_differ_only_in_the_rows_values_are_one_reason():
+    from hdsim.sensitivity.study import failure_reasons
+
+    failures = [{"row": 2, "message": "refused: undercut depth h_p = 2 mm must be less than h_pz = 1 mm"},
+                {"row": 5, "message": "refused: undercut depth h_p = 3.5 mm must be less than h_pz = 1.2e-3 mm"},
+                {"row": 9, "message": "solver failed: step size below the minimum at t = 0.3 s"}]
+    assert failure_reasons(failures) == [
+        {"reason": failures[0]["message"], "rows": 2, "first_row": 2},
+        {"reason": failures[2]["message"], "rows": 1, "first_row": 9}]

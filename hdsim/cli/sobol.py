@@ -219,6 +219,10 @@ def _write_outputs(args, summary, result, analytic, target) -> None:
                                      result.convergence, target, analytic))
     summary["figures"] = [str(f) for f in figs]
     write_text_atomic(folder / summary_name, json.dumps(summary, indent=1, allow_nan=False))
+    if args.report:  # a folder of its own: a convergence figure of an earlier study there is stale
+        from hdsim.io.report_files import replace_report_files
+
+        replace_report_files(folder, [folder / summary_name, *figs])
     # as `hdsim simulate` says what it wrote (on stderr: stdout may be the JSON)
     written = ([args.out] if args.out else []) + [str(folder / summary_name)] + summary["figures"]
     print(f"wrote {', '.join(written)}", file=sys.stderr)

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from hdsim.atomic import write_text_atomic
-from hdsim.identification.report_files import replace_report_files
+from hdsim.io.report_files import replace_report_files
 from hdsim.io.figures import save_figure
 
 __all__ = ["Page", "new_figure", "save", "step_label", "diagnosis_page", "wrong_test_page", "rounded", "provenance",
@@ -131,7 +131,7 @@ class Page:
     def write(self, folder) -> Path:
         """Write ``index.md`` and ``index.html`` into ``folder``; returns ``index.html``. The
         files of an earlier report in ``folder`` that this page does not show are removed
-        (`hdsim.identification.report_files`): a reader takes every figure there for this one's."""
+        (`hdsim.io.report_files`): a reader takes every figure there for this one's."""
         folder = Path(folder)
         write_text_atomic(folder / "index.md", self.markdown())
         write_text_atomic(folder / "index.html", self.html())

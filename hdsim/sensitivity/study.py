@@ -6,6 +6,7 @@ for any picklable model ``f(X: (n, d)) -> (n,)``.
 
 from __future__ import annotations
 
+import re
 import sys
 import time
 from dataclasses import dataclass, field
@@ -228,15 +229,21 @@ def _failure_records(store, n) -> list[dict]:
 
 
 def failure_reasons(failures: list[dict]) -> list[dict]:
-    """Why rows failed, once per distinct message: ``{"reason", "rows", "first_row"}`` in the
-    order of each reason's first row (the study's JSON: a refused geometry or a solver
-    failure, without reading every row of ``failures``)."""
+    """Why rows failed, once per kind of message: ``{"reason", "rows", "first_row"}`` in the
+    order of each kind's first row (the study's JSON: a refused geometry or a solver
+    failure, without reading every row of ``failures``). Messages that differ only in their
+    numbers are one kind (a refusal names the row's own values); ``reason`` is the first
+    row's message."""
     grouped: dict[str, dict] = {}
     for record in failures:  # sorted by row (`_failure_records`)
-        entry = grouped.setdefault(record["message"], {"reason": record["message"], "rows": 0,
-                                                       "first_row": record["row"]})
+        kind = _NUMBER.sub("#", record["message"])
+        entry = grouped.setdefault(kind, {"reason": record["message"], "rows": 0, "first_row": record["row"]})
         entry["rows"] += 1
     return list(grouped.values())
+
+
+#: a number in a message (signed, decimal, exponent)
+_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 
 
 def _report_failures(failures, store, log):
