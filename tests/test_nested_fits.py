@@ -113,6 +113,37 @@ def test_a_fit_stopped_early_keeps_the_model_it_contains():
     assert res.internal["damping.coefficient"] < 1e-290 and res.uncertainty[K0_NAME] > 0
 
 
+class BatchDependentEvaluator(Evaluator):
+    """The quasi-static evaluator, with a twist that moves with the number of rows in its batch
+    (as the real one's does at its resolution: a parameter array of one row and of two round
+    differently in the last bit, and a stiff friction law's Newton stop turns that into
+    ~1e-7 rad)."""
+
+    def twist(self, models, max_iter: int = 60):
+        out = super().twist(models, max_iter)
+        return out + 1e-6 * np.sin(np.arange(out.shape[1]) * out.shape[0])
+
+
+def test_a_kept_model_is_judged_at_the_cost_it_was_kept_for_whatever_the_batch_of_its_last_pass():
+    """The model kept is evaluated once more, for its Jacobian, in a batch of another size: a
+    fit that took that evaluation's cost ended 4e-5 above its model on a zoo record (an
+    internal error of `hdsim diagnose`)."""
+    meas = _stiffness(("hardening",), ("friction",), seed=1, n_rows=300)
+    ev = BatchDependentEvaluator(meas)
+    base = result_of(ev, _fitted(make_problem(build_model(None, {"friction": "dahl"}, meas), meas, ev), ev))
+    prob = make_problem(build_model(None, {"friction": "dahl", "damping": "viscous"}, meas), meas, ev,
+                        start=dict(base.internal))
+    prob.max_iter = 1
+    fit_many(ev, [prob])
+    res = result_of(ev, prob)  # raised "ended at RSS … above the … of the model it contains"
+    assert prob.nested.kept and res.rss == pytest.approx(prob.nested.cost, rel=1e-12)
+
+
+def _fitted(problem, ev):
+    fit_many(ev, [problem])
+    return problem
+
+
 def test_a_fit_worse_than_the_model_it_contains_is_an_internal_error():
     check_nested(1.0 + 0.5 * NESTING_TOLERANCE, 1.0, "within round-off")
     with pytest.raises(RuntimeError, match="internal error.*friction"):

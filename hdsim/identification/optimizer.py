@@ -148,12 +148,19 @@ def _trial_points(p: FitProblem) -> np.ndarray:
 def _update(p: FitProblem, r_rows: np.ndarray, has_base: bool, steps, trials, tol, twist) -> None:
     k = p.u.size
     if has_base:  # first tick: base point and Jacobian
-        p.r, p.twist_at_u = r_rows[0], twist[0]
+        base = r_rows[0]
+        if not (p.nested is not None and p.nested.kept):
+            p.r, p.twist_at_u = base, twist[0]
+        # else the kept model stays as first evaluated: the evaluator's result moves with
+        # the batch a row is in (a parameter array of one row and of two round differently
+        # in the last bit, and a stiff friction law's Newton stop turns that into ~1e-7 rad),
+        # and the fit is judged against the cost it had then; the Jacobian differences
+        # below are taken within this batch
         p.cost = float(p.r @ p.r)
         if not np.isfinite(p.cost):
             p.done, p.message = True, "failed: the model cannot be evaluated at the start values"
             return
-        J = ((r_rows[1:1 + k] - p.r) / steps[:, None]).T
+        J = ((r_rows[1:1 + k] - base) / steps[:, None]).T
         # a column the evaluator could not solve carries no slope (a NaN would make every step NaN)
         p.J = np.where(np.isfinite(J), J, 0.0)
         if k == 0:
