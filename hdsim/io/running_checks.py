@@ -16,7 +16,8 @@ against the drive's catalog (docs/measurements.md, "Checks before any fit"):
 
 Speed comes from the WG angle by Savitzky–Golay differentiation (Savitzky & Golay,
 Anal. Chem. 36, 1964); the plateaus are runs of one sign within 5 % of their mean on a
-speed smoothed over 0.1 s (`sweep_kinematics`).
+speed smoothed over 0.1 s, trimmed to the rows whose speed has settled (`sweep_kinematics`,
+`settled_span`).
 """
 
 from __future__ import annotations
@@ -30,11 +31,18 @@ from hdsim.io.check import Check
 from hdsim.io.data_checks import ratio_consistency
 from hdsim.signals import breakaway_episodes, noise_level
 
-__all__ = ["Segment", "shaft_sign", "speed_and_acceleration", "sweep_kinematics", "constant_speed_segments", "distinct_speeds",
+__all__ = ["Segment", "shaft_sign", "speed_and_acceleration", "sweep_kinematics", "settled_span",
+           "constant_speed_segments", "distinct_speeds",
            "running_checks", "turn_speed", "whole_turns", "turn_mean", "running_levels", "PLATEAU_TOLERANCE"]
 
 #: a plateau: the speed stays within this fraction of its running mean
 PLATEAU_TOLERANCE = 0.05
+#: a plateau row has settled when its smoothed speed is within this many standard deviations
+#: of the plateau's speed noise (or ripple) of the plateau's speed
+SETTLED_SIGMAS = 4.0
+#: ... or within this fraction of it, whichever is wider: a noise-free record has no noise to
+#: judge by, and an inertia torque J·dω/dt of a tail inside it is a fraction of a per cent
+SETTLED_FLOOR = 0.005
 #: a plateau turns the wave generator at least this far [rad]
 MIN_TRAVEL = 1.0
 #: two plateau speeds are distinct when they differ by more than this factor
@@ -89,10 +97,13 @@ def sweep_kinematics(time, angle) -> tuple[np.ndarray, np.ndarray, list]:
     derivative useless at a few rad/s), and the speed averaged over one wave-generator
     turn centred on each row (a servo's speed ripples at the orders of the WG angle, with
     the torque ripple it fights; within 0.1 s at a few hundred rpm that ripple is not
-    averaged out, and the plateau falls into pieces a fraction of a turn long). On each
-    plateau, trimmed by 0.05 s at both ends, the speed is the slope of the angle fitted
-    over the whole plateau and the acceleration is zero. Elsewhere (the ramps) the 10 ms
-    derivatives stand. A plateau must turn the wave generator by `MIN_TRAVEL` at least.
+    averaged out, and the plateau falls into pieces a fraction of a turn long). Each
+    plateau is trimmed by 0.05 s at both ends (the reach of the 0.1 s smoothing) and then
+    to its settled rows (`settled_span`): a run within 5 % of its mean still holds the
+    tail of a ramp, and a slow ramp at speed is itself such a run, where the torque holds
+    J·dω/dt. On each plateau the speed is the slope of the angle fitted over the whole
+    plateau and the acceleration is zero. Elsewhere (the ramps) the 10 ms derivatives
+    stand. A plateau must turn the wave generator by `MIN_TRAVEL` at least.
 
     Returns
     -------
@@ -108,7 +119,7 @@ def sweep_kinematics(time, angle) -> tuple[np.ndarray, np.ndarray, list]:
     for averaged in (smooth, np.where(np.isfinite(turn := turn_speed(t, x)), turn, smooth)):
         found = []
         for seg in constant_speed_segments(t, averaged):
-            start, stop = seg.start + trim, seg.stop - trim
+            start, stop = settled_span(t, smooth, seg.start + trim, seg.stop - trim)
             if stop - start < 10:
                 continue
             slope = float(np.polyfit(t[start:stop] - t[start], x[start:stop], 1)[0])
@@ -121,6 +132,55 @@ def sweep_kinematics(time, angle) -> tuple[np.ndarray, np.ndarray, list]:
         speed[seg.start:seg.stop] = seg.speed
         accel[seg.start:seg.stop] = 0.0
     return speed, accel, best
+
+
+def settled_span(time, speed, start: int, stop: int) -> tuple[int, int]:
+    """The settled rows ``start:stop`` of a plateau candidate, model-free; an empty span
+    (``start, start``) when it has none: the candidate is a stretch of a ramp.
+
+    Why: the measured torque of a row holds the inertia torque ``J·dω/dt`` while the speed
+    still changes, and the mean over a plateau's rows is the running torque reported for
+    it (docs/measurements.md, "Checks before any fit"). A run within 5 % of its mean
+    (`constant_speed_segments`) holds the tail of the ramp before it, and on a slow ramp
+    at speed it is a stretch of the ramp itself.
+
+    ``speed`` is the record's smoothed speed [rad/s]; its acceleration is its slope. What
+    the plateau's speed is, and how much its speed and acceleration wander when settled,
+    come from the middle half of the candidate (a ramp's tail is at the ends): the median
+    speed, and the standard deviations about their straight-line trends of the speed and
+    the acceleration there (a servo's speed ripple and an encoder's steps are that
+    wander; a median absolute deviation is not used: an encoder's steps leave most rows of
+    a slow plateau on one value and their deviation 0). A row has settled when its speed
+    is within `SETTLED_SIGMAS` deviations of the plateau's speed and its acceleration
+    within as many of zero, or, where the record is quieter than that, when its speed is
+    within `SETTLED_FLOOR` of the plateau's speed and its acceleration would change the
+    speed by less than that over the candidate. The span runs from the row after the last
+    unsettled row of the first half to the first unsettled row of the second half.
+    """
+    n = stop - start
+    if n < 4:
+        return start, start
+    t = np.asarray(time, dtype=float)[start:stop]
+    v = np.asarray(speed, dtype=float)[start:stop]
+    accel = np.gradient(v, t)
+    core = slice(n // 4, n - n // 4)
+    level = float(np.median(v[core]))
+    duration = max(float(t[-1] - t[0]), float(np.finfo(float).tiny))
+    speed_band = max(SETTLED_SIGMAS * _wander(t[core], v[core]), SETTLED_FLOOR * abs(level))
+    accel_band = max(SETTLED_SIGMAS * _wander(t[core], accel[core]), SETTLED_FLOOR * abs(level) / duration)
+    unsettled = (np.abs(v - level) > speed_band) | (np.abs(accel) > accel_band)
+    half = n // 2
+    before = np.flatnonzero(unsettled[:half])
+    after = np.flatnonzero(unsettled[half:])
+    first = start + (int(before[-1]) + 1 if before.size else 0)
+    last = start + half + (int(after[0]) if after.size else n - half)
+    return (first, last) if last > first else (start, start)
+
+
+def _wander(t, values) -> float:
+    """Standard deviation of ``values`` about their straight-line trend in ``t``."""
+    tau = t - t[0]
+    return float(np.std(values - np.polyval(np.polyfit(tau, values, 1), tau)))
 
 
 def turn_speed(time, angle) -> np.ndarray:
