@@ -148,10 +148,16 @@ def _print_torque(meas, result, summary) -> None:
         shown = "not run" if value is None else f"{value:.4g}"
         print(f"  {name:<40} {shown}")
     derived = summary.get("derived", {})
-    if derived.get("starting_torque_Nm") is not None:
-        sigma = derived.get("starting_torque_uncertainty_Nm")
-        print(f"  starting torque (the law at rest)          {derived['starting_torque_Nm']:.4g} ± "
-              f"{'?' if sigma is None else f'{sigma:.2g}'} N·m on the {side} shaft")
+    # each way where the law is asymmetric (hdsim.identification.sweep_start), else its one level
+    ways = [w for w in ("forward", "reverse") if derived.get(f"starting_torque_{w}_Nm") is not None] or [""]
+    for way in ways if derived.get("starting_torque_Nm") is not None else ():
+        key = f"starting_torque_{way}_" if way else "starting_torque_"
+        value, sigma = derived[key + "Nm"], derived.get(key + "uncertainty_Nm")
+        label = f"starting torque {way} (the law at rest)" if way else "starting torque (the law at rest)"
+        shown = f"{value:.4g} N·m (not determined by the record)" if sigma is None else f"{value:.4g} ± {sigma:.2g} N·m"
+        print(f"  {label:<42} {shown} on the {side} shaft")
+    if derived.get("starting_torque_basis"):
+        print(f"  starting torque: {derived['starting_torque_basis']}")
     for way, basis in summary.get("running_torque_basis", {}).items():
         print(f"  running torque {way}: {basis}")
     for ripple in summary.get("ripple_Nm", []):

@@ -18,7 +18,10 @@ hysteresis loss). Each prediction carries a 95 % band propagated from the covari
 A friction sweep's fit is a law on the wave-generator shaft, linear in its amplitudes:
 `sweep_predictions` gives its no-load running torque at the catalog's 2000 rpm (each
 direction, averaged over a turn) and its starting torque, each with the band
-``±1.96 √(g Σ gᵀ)``, exact for a law linear in the amplitudes.
+``±1.96 √(g Σ gᵀ)``, exact for a law linear in the amplitudes. The starting torque is
+given each way when the law has a direction asymmetry, and without a band when the record
+holds no plateaus slow enough to determine it (`hdsim.identification.sweep_start`): the
+covariance takes the assumed shape of the Stribeck rise as known below the slowest plateau.
 
 A coordinate the record does not determine (an infinite variance,
 `hdsim.identification.optimizer.inverse_gram`, or a standard uncertainty larger than the
@@ -215,13 +218,22 @@ def sweep_predictions(fit, scale) -> list[Prediction]:
     Returns
     -------
     list of Prediction
-        Running torque forward and reverse at 2000 rpm and the starting torque, on the
-        input (wave-generator) shaft [N·m].
+        Running torque forward and reverse at 2000 rpm and the starting torque (each way
+        for a law with a direction asymmetry, else one), on the input (wave-generator)
+        shaft [N·m]; a starting torque the record does not determine has no band
+        (`hdsim.identification.sweep_start`).
     """
-    running = getattr(scale, "running_torque", 0.0)
+    from hdsim.identification.sweep_start import BREAKAWAY_TEST, starting_level, starting_levels, \
+        starting_torque_undetermined
+
+    running, starting = getattr(scale, "running_torque", 0.0), getattr(scale, "starting_torque", 0.0)
     figures = [("running torque at 2000 rpm, forward", lambda law: float(law.running_torque(CATALOG_SPEED)), running),
-               ("running torque at 2000 rpm, reverse", lambda law: float(-law.running_torque(-CATALOG_SPEED)), running),
-               ("starting torque", lambda law: float(law.starting_torque), getattr(scale, "starting_torque", 0.0))]
+               ("running torque at 2000 rpm, reverse", lambda law: float(-law.running_torque(-CATALOG_SPEED)), running)]
+    # the level at rest each way where the law is asymmetric, one figure where it has one level
+    # (`hdsim.identification.sweep_start`); below the slowest plateau the record may not determine it
+    figures += [(f"starting torque, {'both directions (one level)' if way == 'both' else way}",
+                 lambda law, way=way: starting_level(law, way), starting) for way in starting_levels(fit)]
+    extrapolated = starting_torque_undetermined(fit) is not None
     coordinates = fit.coordinates
     if coordinates is not None:  # the figures are linear in the amplitudes: one step of each
         # an amplitude's own size (a micro-N·m when it is 0), as running_plausibility judges it
@@ -231,7 +243,9 @@ def sweep_predictions(fit, scale) -> list[Prediction]:
     for label, figure, datasheet in figures:
         value = figure(fit.law)
         low, high, method = np.nan, np.nan, "no covariance"
-        if coordinates is not None:
+        if extrapolated and label.startswith("starting torque"):
+            method = f"{UNDETERMINED}: the law below the slowest plateau; {BREAKAWAY_TEST}"
+        elif coordinates is not None:
             g = np.zeros(sd.size)
             for j, law in moved.items():
                 g[j] = np.nan if law is None else (figure(law) - value) / sd[j]

@@ -109,7 +109,8 @@ class RunningTorqueTest(TestKind):
 
     def fit_json(self, fit) -> dict:
         summary = fit.summary()
-        return {"fitted": summary["fitted"], "uncertainty": summary["uncertainty"], "law": summary["law"]}
+        return {"fitted": summary["fitted"], "uncertainty": summary["uncertainty"], "law": summary["law"],
+                "starting_torque_basis": summary["derived"]["starting_torque_basis"]}
 
     def diagnosis_json(self, diagnosis) -> dict:
         summary = diagnosis.final.fit.summary()

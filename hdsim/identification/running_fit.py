@@ -219,14 +219,13 @@ class RunningFit(TorqueFit):
         return {f"running_torque_{way}_Nm": value for way, (value, _) in self._running_torques().items()}
 
     def starting_torque(self) -> dict:
-        """The law's starting torque ``F_c + (F_s − F_c)`` on the file's side [N·m] and its
-        standard uncertainty from the fit (a derived figure is never given without it: a
-        Stribeck rise the sweep does not determine makes a starting torque it does not either)."""
-        side = abs(self.record.side_factor)
-        sigma = math.hypot(self.uncertainty.get("base.coulomb_torque", 0.0),
-                           self.uncertainty.get("friction.stribeck_rise", 0.0))
-        return {"starting_torque_Nm": side * float(self.law.starting_torque),
-                "starting_torque_uncertainty_Nm": side * sigma if math.isfinite(sigma) else None}
+        """The law's starting torque on the file's side [N·m], each way where the law is
+        asymmetric, with its standard uncertainty, or None where the record does not
+        determine it, and ``starting_torque_basis`` saying which
+        (`hdsim.identification.sweep_start.starting_torque_summary`)."""
+        from hdsim.identification.sweep_start import starting_torque_summary
+
+        return starting_torque_summary(self)
 
     def running_torque_basis(self) -> dict:
         """Direction -> what its running torque rests on (measured turns, or the fitted law)."""
@@ -562,12 +561,14 @@ def running_plausibility(fit: RunningFit, drive) -> list[dict]:
                                f"{law.coulomb_torque:.3g} N·m: the torque keeps one sign in both directions, an "
                                "offset or a load (gravity, a spring) larger than the friction"})
     start = fit.starting_torque()
-    if start["starting_torque_uncertainty_Nm"] is None or start["starting_torque_uncertainty_Nm"] > \
-            0.5 * start["starting_torque_Nm"]:
+    value, sigma = start["starting_torque_Nm"], start["starting_torque_uncertainty_Nm"]
+    if sigma is None:  # an extrapolation below the slowest plateau (`sweep_start`)
         out.append({"check": "starting_torque", "status": "warn",
-                    "message": f"the starting torque {start['starting_torque_Nm']:.3g} ± "
-                               f"{start['starting_torque_uncertainty_Nm'] or float('inf'):.2g} N·m rests on a "
-                               "Stribeck rise the sweep does not determine: a breakaway test measures it"})
+                    "message": f"the starting torque {value:.3g} N·m is {start['starting_torque_basis']}"})
+    elif sigma > 0.5 * value:
+        out.append({"check": "starting_torque", "status": "warn",
+                    "message": f"the starting torque {value:.3g} ± {sigma:.2g} N·m: the sweep hardly determines "
+                               "it; a breakaway ramp (# test: breakaway) measures it"})
     for name, value in fit.fitted.items():
         sigma = fit.uncertainty.get(name, 0.0)
         if abs(sigma) > abs(value) and abs(value) > 0:

@@ -134,18 +134,24 @@ def running_figures(diagnosis, folder, catalog_running_torque: float | None = No
 def running_sections(d: dict) -> list[tuple[str, tuple]]:
     """The fitted law and the sweep's metrics, as (heading, (head, rows)) of the report."""
     metrics = [(k, "not run" if v is None else f"{v:.4g}") for k, v in d["metrics"].items()]
-    return [("Fitted law (wave-generator shaft)", (("term", "value", "unit"), law_rows(d["final"]["law"]))),
+    law = law_rows(d["final"]["law"], d["final"].get("starting_torque_basis"))
+    return [("Fitted law (wave-generator shaft)", (("term", "value", "unit"), law)),
             ("Metrics", (("metric", "value"), metrics))]
 
 
-def law_rows(law: dict) -> list[tuple[str, str, str]]:
+def law_rows(law: dict, starting_basis: str | None = None) -> list[tuple[str, str, str]]:
     """A fit's law table (`RunningFit.law_table`) as a reader's rows: 4 significant digits,
-    and the ripple as torques [N·m] (the table keeps them as fractions of the level)."""
+    and the ripple as torques [N·m] (the table keeps them as fractions of the level);
+    ``starting_basis`` (`hdsim.identification.sweep_start`) follows a starting torque the
+    record does not determine."""
     def shown(values):
         return ", ".join(f"{float(v):.4g}" for v in values) if values else "none"
 
     level = law["starting_torque_Nm"] * law["coulomb_share"]
-    return [("starting torque F_s", shown([law["starting_torque_Nm"]]), "N·m"),
+    start = shown([law["starting_torque_Nm"]])
+    if starting_basis and "not determined" in starting_basis:
+        start += f" ({starting_basis.split(';')[0]})"
+    return [("starting torque F_s", start, "N·m"),
             ("Coulomb level F_c", shown([level]), "N·m"),
             ("Stribeck speed ω_s", shown([law["stribeck_speed_rpm"]]), "rpm"),
             ("viscous b", shown([law["viscous_Nms"]]), "N·m·s/rad"),

@@ -260,6 +260,12 @@ def _data() -> dict:
     return tomllib.loads(resources.files("hdsim").joinpath("data/input_friction.toml").read_text())
 
 
+def assumed_stribeck_speed() -> float:
+    """The Stribeck speed ω_s [rad/s] the catalog laws assume (``[shape]`` of
+    hdsim/data/input_friction.toml; no catalog gives it)."""
+    return float(_data()["shape"]["stribeck_speed"])
+
+
 def from_catalog(starting_torque: float, running_torque: float, running_speed: float = CATALOG_SPEED,
                  **shape) -> InputFriction:
     """Input friction that reproduces a catalog starting torque and no-load running torque.

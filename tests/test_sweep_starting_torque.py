@@ -1,0 +1,57 @@
+"""A sweep's starting torque is the fitted law at rest: given with an uncertainty only where
+the record's plateaus reach the top of the Stribeck rise, each way only where the law has a
+direction asymmetry the record determines (`hdsim.identification.sweep_start`).
+
+The records are made with the library's own law (`test_running_torque.law_record`): the
+law's Gaussian rise is then exact below the slowest plateau, and still a sweep that never
+ran that slow cannot know it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from test_running_torque import FULL, law_record
+
+from hdsim.identification.predictions import UNDETERMINED, sweep_predictions
+from hdsim.identification.running_fit import fit_running
+
+#: F_s = 0.09, F_c = 0.05 N·m, ω_s = 8 rad/s, Δ = 0.006 N·m; no ripple (fewer columns)
+LAW = FULL.with_updates(ripple_orders=(), ripple_amplitudes=(), ripple_phases=())
+
+
+def test_a_starting_torque_below_the_slowest_plateau_is_not_determined_by_the_record():
+    # one plateau speed (3 rad/s) below half of ω_s: the rise's top is never seen. Before, it
+    # came with an uncertainty of 0.1 % from a covariance that takes the law's shape as known
+    fit = fit_running(law_record(LAW, speeds=(3.0, 30.0, 150.0), fs=200.0, dwell_turns=2.0), ["friction"])
+    derived = fit.summary()["derived"]
+    assert derived["starting_torque_uncertainty_Nm"] is None
+    assert derived["starting_torque_forward_uncertainty_Nm"] is None
+    assert "not determined by the record" in derived["starting_torque_basis"]
+    assert "# test: breakaway" in derived["starting_torque_basis"]
+    # the law's asymmetry is determined: its level at rest each way, F_s ± Δ
+    forward, reverse = derived["starting_torque_forward_Nm"], derived["starting_torque_reverse_Nm"]
+    assert forward - reverse == pytest.approx(2 * 0.006, rel=0.05)
+    assert (forward + reverse) / 2 == pytest.approx(derived["starting_torque_Nm"], rel=1e-12)
+    rows = {p.label: p for p in sweep_predictions(fit, None) if p.label.startswith("starting torque")}
+    assert sorted(rows) == ["starting torque, forward", "starting torque, reverse"]
+    assert all(p.method.startswith(UNDETERMINED) and "breakaway" in p.method and math.isnan(p.low)
+               for p in rows.values())
+
+
+def test_plateaus_on_the_top_of_the_rise_determine_it_and_one_level_is_one():
+    # two plateau speeds at or below ω_s / 2 = 4 rad/s: the band is given (the Stribeck grid's
+    # nearest speed leaves 0.4 % of model error); a law with no asymmetry has one starting
+    # torque for both directions
+    law = LAW.with_updates(coulomb_asymmetry=0.0)
+    fit = fit_running(law_record(law, speeds=(1.5, 3.5, 30.0), fs=100.0, dwell_turns=1.0, noise=1e-3), ["friction"])
+    derived = fit.summary()["derived"]
+    sigma = derived["starting_torque_uncertainty_Nm"]
+    assert sigma is not None and sigma < 1e-3
+    assert derived["starting_torque_Nm"] == pytest.approx(0.09, rel=0.01)
+    assert "starting_torque_forward_Nm" not in derived
+    assert "one level both ways" in derived["starting_torque_basis"]
+    (row,) = [p for p in sweep_predictions(fit, None) if p.label.startswith("starting torque")]
+    assert row.label == "starting torque, both directions (one level)"
+    assert row.method == "linear in the amplitudes" and row.high - row.low < 0.01
