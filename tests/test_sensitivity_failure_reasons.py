@@ -6,7 +6,6 @@ row here reaches the solver."""
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from hdsim.errors import SolverError
 from hdsim.sensitivity import scenario_outputs

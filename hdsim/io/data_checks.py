@@ -354,7 +354,7 @@ def torque_sign_convention(meas):
 
 
 def _kinematic_error_identity(meas, drive: DriveScale) -> list[Check]:
-    wg, out_angle = np.asarray(meas.wg_angle, dtype=float), np.asarray(meas.angle, dtype=float)
+    out_angle = np.asarray(meas.angle, dtype=float)
     ke = np.asarray(meas.kinematic_error, dtype=float)
     checks = []
     scale = max(float(np.max(np.abs(out_angle))), 1.0)
