@@ -39,6 +39,16 @@ def test_the_cli_text_and_the_typed_bounds_build_the_same_problem():
     assert typed == parsed and typed.bounds[0] == (0.5e-3, 0.7e-3)
 
 
+@pytest.mark.parametrize("names, bound", [(["h_pz", "h_c"], "flexspline.h_pz"),
+                                          (["flexspline.h_pz", "h_c"], "h_pz")])
+def test_a_parameter_is_one_whether_named_short_or_dotted(names, bound):
+    """``h_pz`` in --params and ``flexspline.h_pz`` in --bounds (or the other way round) had
+    been refused as a parameter the study does not vary."""
+    problem = from_unit("CSG-25-100", names, OUTPUT, None, 0.1, {bound: (0.5e-3, 0.7e-3)},
+                        {bound: "unif"})[1]
+    assert list(problem.names) == names and problem.bounds[0] == (0.5e-3, 0.7e-3)
+
+
 @pytest.mark.parametrize("value", ["0.5e-3:0.7e-3", (0.7e-3, 0.5e-3), (1e-3, 1e-3), (1e-3,), (1e-3, 2e-3, 3e-3),
                                    (1e-3, math.nan), (-math.inf, 1.0), (True, 2.0), ("a", "b"), 0.5e-3, None])
 def test_bounds_that_are_not_low_high_pairs_are_refused_in_python_words(value):

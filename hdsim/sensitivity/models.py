@@ -57,6 +57,7 @@ def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, 
     drive = batch.as_drive(unit)
     # nominal values only matter for --range
     nominal = {} if range_frac is None else batch.nominal_values(drive, list(names))
+    bounds, dists = (_keyed_as_names(batch, drive, names, given) for given in (bounds, dists))
     problem = build_problem(names, nominal, range_frac, bounds, dists, wording or CLI_WORDING)
     _refuse_unbuildable_ends(drive, problem, batch.resolve_names(drive, list(problem.names)))
     # a built-in name travels as a name; anything else (a drive file too) as the model read
@@ -68,6 +69,26 @@ def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, 
              "fingerprint": batch.drive_fingerprint(drive, func.scenario, func.evaluator),
              "evaluator": func.evaluator}
     return func, problem, output, model, None
+
+
+def _keyed_as_names(batch, drive, names, options):
+    """``options`` (bounds or distributions by parameter) keyed as ``names`` are: ``h_c`` and
+    ``flexspline.h_c`` are one parameter, so either may name it in either place. A key that
+    is no parameter of the drive stays as written, for `build_problem` to name."""
+    if not options:
+        return options
+    try:
+        as_given = dict(zip(batch.resolve_names(drive, list(names)), names))
+    except InputError:
+        return options  # the names themselves are refused with their own message
+    out = {}
+    for key, value in options.items():
+        try:
+            dotted = batch.resolve_names(drive, [key])[0]
+        except InputError:
+            dotted = key
+        out[as_given.get(dotted, key)] = value
+    return out
 
 
 def _is_default_scenario(batch, output: str, given, resolved) -> bool:
