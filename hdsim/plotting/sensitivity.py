@@ -48,10 +48,13 @@ def plot_indices(path, names, analysis: dict, analytic: dict | None = None,
     for shift, key, colour, label in ((-w / 2, "S1", "tab:blue", "first order S1"),
                                       (w / 2, "ST", "tab:orange", "total ST")):
         ax.bar(x + shift, analysis[key], w, color=colour, alpha=0.8, label=label)
+        # the two intervals in the legend, not only in the default title: a study's own
+        # title (the command's: output and N) replaces it
+        first = key == "S1"
         ax.errorbar(x + shift, analysis[key], yerr=analysis[f"{key}_conf"], fmt="none",
-                    ecolor="0.45", elinewidth=0.8, capsize=5)
+                    ecolor="0.45", elinewidth=0.8, capsize=5, label="bootstrap 95 % CI" if first else None)
         ax.errorbar(x + shift, analysis[key], yerr=analysis[f"{key}_conf_replicates"],
-                    fmt="none", ecolor="k", elinewidth=2.2, capsize=0)
+                    fmt="none", ecolor="k", elinewidth=2.2, capsize=0, label="replicate 95 % CI" if first else None)
         if analytic is not None:
             ax.scatter(x + shift, analytic[key], marker="_", s=300, color="k", zorder=3,
                        label="analytic" if key == "S1" else None)
