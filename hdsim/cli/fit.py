@@ -134,9 +134,26 @@ def _print_twist(meas, result, summary) -> None:
     for name, value in result.internal.items():
         sigma = result.uncertainty.get(name, float("nan"))
         print(f"  {name:<28} {value:.6g} " + (f"± {sigma:.2g}" if not math.isinf(sigma) else "(not determined)"))
+    _print_harmonics(result)
     for line in summary["findings"]:
         print(f"  - {line}")
     print(f"  fitted parameter set: {summary['parameters_file']}")
+
+
+def _print_harmonics(result) -> None:
+    """The kinematic error's amplitudes [arcsec] and phases [rad], each with its uncertainty
+    (solved linearly, so not among the fitted coordinates)."""
+    from hdsim.units import ARCSEC_PER_RAD
+
+    for name, value in result.params.items():
+        family, _, field = name.partition(".")
+        sigma = result.uncertainty.get(name)
+        if family != "kinematic_error" or sigma is None:
+            continue
+        amplitude = field.startswith("a")
+        scale, unit = (ARCSEC_PER_RAD, "arcsec") if amplitude else (1.0, "rad")
+        told = f"± {sigma * scale:.2g} {unit}" if math.isfinite(sigma) else f"{unit} (not determined)"
+        print(f"  {name:<28} {value * scale:.4g} {told}")
 
 
 def _print_torque(meas, result, summary) -> None:

@@ -27,7 +27,7 @@ import numpy as np
 
 from hdsim.errors import InputError, SolverError, unknown_name
 from hdsim.identification.optimizer import (FittedRows, bic, check_nested, covariance, effective_n, fit_many,
-                                           residuals, uncertainty)
+                                           linear_covariance, residuals, uncertainty)
 from hdsim.identification.problem import K0_NAME, Evaluator, FitProblem, make_problem, other_starts
 from hdsim.io.measurement import Measurement
 from hdsim.model import effects as fx
@@ -335,6 +335,9 @@ def result_of(ev: Evaluator, prob: FitProblem, unit: str = "") -> FitResult:
         updates.update({f"kinematic_error.{k}": v for k, v in linear.items()})
     cov = covariance(prob, r_rows[0])
     unc = uncertainty(prob, cov)
+    if linear:
+        kinematic = model.kinematic_error.linear_uncertainty(coef[1:], linear_covariance(prob, r_rows[0])[1:, 1:])
+        unc.update({f"kinematic_error.{k}": v for k, v in kinematic.items()})
     coordinates = fitted_coordinates(prob, cov)
     prediction = ev.y - full[0]
     effects = {f: getattr(model, f).id for f in SLOTS if not getattr(model, f).is_null}

@@ -332,6 +332,17 @@ def covariance(prob: FitProblem, r: np.ndarray) -> np.ndarray | None:
         return None
 
 
+def linear_covariance(prob: FitProblem, r: np.ndarray) -> np.ndarray:
+    """Covariance of the coefficients solved linearly at the fitted coordinates (the offset
+    first, then the kinematic error's), ``s² (BᵀB)⁻¹`` on the fitted rows widened by
+    ``n / n_eff`` as `covariance` is: conditional on the fitted coordinates, as the offset's
+    own variance there is."""
+    B = prob.basis[prob.rows]
+    n = r.size
+    s2 = float(r @ r) / max(n - B.shape[1] - prob.u.size, 1)
+    return inverse_gram(B) * s2 * (n / effective_n(r))
+
+
 def uncertainty(prob: FitProblem, cov: np.ndarray | None) -> dict:
     """1-sigma uncertainties of the physical parameters and the offset from the covariance
     of the fitted coordinates (`covariance`: Jacobian with the offset column, n_eff-widened);

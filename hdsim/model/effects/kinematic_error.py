@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass
 from functools import cached_property
 from typing import ClassVar
@@ -45,6 +47,11 @@ class KinematicError(Effect):
     def from_linear(self, coefficients) -> tuple["KinematicError", dict]:
         """The effect (and its parameter values) for least-squares ``coefficients`` of `linear_basis`."""
         raise NotImplementedError
+
+    def linear_uncertainty(self, coefficients, covariance) -> dict:
+        """Standard uncertainty of each parameter `from_linear` gives, from the covariance
+        of ``coefficients`` (no parameters: none)."""
+        return {}
 
 
 @dataclass(frozen=True, eq=False)
@@ -149,6 +156,27 @@ class FourierKinematicError(KinematicError):
             values[an] = float(a)
             values[pn] = float(p)
         return type(self)(**values), values
+
+    def linear_uncertainty(self, coefficients, covariance):
+        """Amplitude ``a = √(s² + c²)`` [rad] and phase ``atan2(c, s)`` [rad] of each order
+        from the covariance of its sine and cosine coefficients ``(s, c)``, to first order:
+        ``σ_a² = g Σ gᵀ`` with ``g = (s, c)/a`` and ``σ_p² = h Σ hᵀ`` with ``h = (−c, s)/a²``
+        (white noise of rms σ over n samples gives ``σ_a = σ √(2/n)`` and ``σ_p = σ_a / a``).
+        A zero amplitude has no phase to speak of: infinite."""
+        pairs = np.asarray(coefficients, dtype=float).reshape(-1, 2)
+        cov = np.asarray(covariance, dtype=float)
+        names = [(f"a{k}", f"p{k}") for k in self.wg_orders] + [("a_out", "p_out")]
+        out = {}
+        for i, ((s, c), (a_name, p_name)) in enumerate(zip(pairs, names)):
+            block = cov[2 * i:2 * i + 2, 2 * i:2 * i + 2]
+            a = math.hypot(s, c)
+            if a == 0.0:
+                out[a_name], out[p_name] = math.sqrt(max(float(np.max(np.diag(block))), 0.0)), math.inf
+                continue
+            g, h = np.array([s, c]) / a, np.array([-c, s]) / a ** 2
+            out[a_name] = math.sqrt(max(float(g @ block @ g), 0.0))
+            out[p_name] = math.sqrt(max(float(h @ block @ h), 0.0))
+        return out
 
     def free_parameters(self, context):
         return ()  # all linear: see linear_basis
