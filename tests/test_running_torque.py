@@ -238,6 +238,20 @@ def test_a_record_that_never_turns_steadily_is_the_wrong_test():
     assert "never turns at a steady speed" in wrong
 
 
+def test_a_torque_channel_that_never_changes_is_the_wrong_test_and_its_json_holds_no_infinity():
+    """A current channel never logged (0 on every row) had been fitted with a law of level 0
+    and no noise floor: the verdict said "rms inf× the noise floor" and --json stopped with an
+    internal error (JSON has no infinity)."""
+    record = law_record(FULL)
+    meas = make_measurement("running_torque", record.time, np.zeros(len(record)), None, wg_angle=record.wg_angle,
+                            ratio=RATIO)
+    checks, _, wrong = examine(meas, DriveScale.of(load_unit()))
+    assert "0 N·m on every row" in wrong and any(c.check == "torque_varies" and c.status == "fail" for c in checks)
+    d = diagnose_running(record, [], max_rounds=0)
+    d.whiteness["rms_over_noise"] = math.inf  # as a residual over a zero floor gives it
+    assert json.loads(json.dumps(d.to_json(), allow_nan=False))["whiteness"]["rms_over_noise"] is None
+
+
 def test_one_speed_and_a_torque_on_the_other_shaft_are_warned():
     law = FULL.with_updates(ripple_orders=(), ripple_amplitudes=(), ripple_phases=())
     t, theta, w, a = sweep_profile(speeds=(100.0,))
@@ -252,11 +266,13 @@ def test_one_speed_and_a_torque_on_the_other_shaft_are_warned():
 # --------------------------------------------------------------------------- command line
 
 
-def test_fit_and_diagnose_on_the_command_line(cli, tmp_path):
+def test_fit_and_diagnose_on_the_command_line(cli, tmp_path, capsys):
+    from hdsim.cli.diagnose import _print as _print_diagnosis
+
     save_measurement(law_record(FULL, noise=2e-3, fs=300.0), tmp_path / "sweep.csv")
     code, stdout, stderr = cli("fit", "sweep.csv", "--effects", "friction,damping,ripple", "--json", cwd=tmp_path)
     assert code == 0, stderr
-    out = json.loads(stdout)
+    out = fitted = json.loads(stdout)
     assert set(out["metrics"]) == {"running_torque_forward_Nm", "running_torque_reverse_Nm"}
     assert out["rmse_Nm"] == pytest.approx(2e-3, rel=0.15) and out["noise_floor_Nm"] == pytest.approx(2e-3, rel=0.15)
     assert all((tmp_path / f).exists() for f in ("sweep.fit.toml", "sweep.fit.torque_vs_speed.png",
@@ -268,6 +284,12 @@ def test_fit_and_diagnose_on_the_command_line(cli, tmp_path):
     assert set(out["added"]) == {"friction", "damping", "ripple"}
     assert {"family", "effect", "rmse_Nm", "score"} <= set(out["ranking"][0])
     assert (tmp_path / "rep" / "index.html").exists()
+    # the same model's starting torque, each way, as the fit gives it (the diagnosis had the mean level only)
+    starting = {k: v for k, v in fitted["derived"].items() if k.startswith("starting_torque")}
+    assert {"starting_torque_forward_Nm", "starting_torque_reverse_Nm"} <= set(starting)
+    assert {k: out["final"]["derived"][k] for k in starting} == pytest.approx(starting)
+    _print_diagnosis(out)
+    assert f"{starting['starting_torque_forward_Nm']:.4g}" in capsys.readouterr().out
     code, _, stderr = cli("fit", "sweep.csv", "--effects", "backlash", cwd=tmp_path)
     assert code == 2 and "elastic path" in stderr
 

@@ -113,6 +113,11 @@ def _print(s) -> None:
         held = f" ({a['provisional']} stands in the model for the loss, not added)" if a.get("provisional") else ""
         print(f"ambiguous: {a['families'][0]} vs {rival}{held}; to separate them: {a['measurement']}")
     print(f"final: {', '.join(s['final']['effects']) or '(base model)'}, rms {s['final'][key] * scale:.3g} {unit}")
+    if "derived" in s["final"]:  # a torque fit's starting torque, as `hdsim fit` prints it
+        from hdsim.cli.fit import starting_torque_lines
+
+        for line in starting_torque_lines(s["final"]["derived"], "the file's shaft"):
+            print(line)
     print(s["verdict"])
     print(f"outcome: {s['outcome']}" + (f"; to decide, record {s['next_measurement']}" if s["next_measurement"]
                                          else ""))

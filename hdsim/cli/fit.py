@@ -156,6 +156,22 @@ def _print_harmonics(result) -> None:
         print(f"  {name:<28} {value * scale:.4g} {told}")
 
 
+def starting_torque_lines(derived: dict, shaft: str) -> list[str]:
+    """A torque fit's starting torque as console lines: each way where the law is asymmetric
+    (`hdsim.identification.sweep_start`), else its one level, and what it rests on."""
+    lines = []
+    ways = [w for w in ("forward", "reverse") if derived.get(f"starting_torque_{w}_Nm") is not None] or [""]
+    for way in ways if derived.get("starting_torque_Nm") is not None else ():
+        key = f"starting_torque_{way}_" if way else "starting_torque_"
+        value, sigma = derived[key + "Nm"], derived.get(key + "uncertainty_Nm")
+        label = f"starting torque {way} (the law at rest)" if way else "starting torque (the law at rest)"
+        shown = f"{value:.4g} N·m (not determined by the record)" if sigma is None else f"{value:.4g} ± {sigma:.2g} N·m"
+        lines.append(f"  {label:<42} {shown} on {shaft}")
+    if derived.get("starting_torque_basis"):
+        lines.append(f"  starting torque: {derived['starting_torque_basis']}")
+    return lines
+
+
 def _print_torque(meas, result, summary) -> None:
     side = meas.torque_side
     print(f"{meas.source}: {meas.test} test, {result.data['rows']} rows, torque on the {side} shaft, effects "
@@ -164,17 +180,8 @@ def _print_torque(meas, result, summary) -> None:
     for name, value in summary["metrics"].items():
         shown = "not run" if value is None else f"{value:.4g}"
         print(f"  {name:<40} {shown}")
-    derived = summary.get("derived", {})
-    # each way where the law is asymmetric (hdsim.identification.sweep_start), else its one level
-    ways = [w for w in ("forward", "reverse") if derived.get(f"starting_torque_{w}_Nm") is not None] or [""]
-    for way in ways if derived.get("starting_torque_Nm") is not None else ():
-        key = f"starting_torque_{way}_" if way else "starting_torque_"
-        value, sigma = derived[key + "Nm"], derived.get(key + "uncertainty_Nm")
-        label = f"starting torque {way} (the law at rest)" if way else "starting torque (the law at rest)"
-        shown = f"{value:.4g} N·m (not determined by the record)" if sigma is None else f"{value:.4g} ± {sigma:.2g} N·m"
-        print(f"  {label:<42} {shown} on the {side} shaft")
-    if derived.get("starting_torque_basis"):
-        print(f"  starting torque: {derived['starting_torque_basis']}")
+    for line in starting_torque_lines(summary.get("derived", {}), f"the {side} shaft"):
+        print(line)
     for way, basis in summary.get("running_torque_basis", {}).items():
         print(f"  running torque {way}: {basis}")
     for ripple in summary.get("ripple_Nm", []):

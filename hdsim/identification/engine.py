@@ -187,7 +187,9 @@ class Diagnosis:
                        for s in self.steps],
             "table": self.table(),
             "holdout": self.fold_rule,
-            "whiteness": dict(self.whiteness),
+            # a ratio over a zero noise floor is infinite, which JSON has no number for
+            "whiteness": {k: None if isinstance(v, float) and not math.isfinite(v) else v
+                          for k, v in self.whiteness.items()},
             "success": self.success,
             "verdict": self.verdict(),
             "findings": {"baseline": self.findings_before, "final": self.findings_after},

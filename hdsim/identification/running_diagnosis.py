@@ -109,8 +109,9 @@ class RunningTorqueTest(TestKind):
 
     def fit_json(self, fit) -> dict:
         summary = fit.summary()
+        # derived: the inertia and the starting torque (each way, with its basis), as `hdsim fit` gives them
         return {"fitted": summary["fitted"], "uncertainty": summary["uncertainty"], "law": summary["law"],
-                "starting_torque_basis": summary["derived"]["starting_torque_basis"]}
+                "derived": summary["derived"]}
 
     def diagnosis_json(self, diagnosis) -> dict:
         summary = diagnosis.final.fit.summary()

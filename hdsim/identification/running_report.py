@@ -134,7 +134,7 @@ def running_figures(diagnosis, folder, catalog_running_torque: float | None = No
 def running_sections(d: dict) -> list[tuple[str, tuple]]:
     """The fitted law and the sweep's metrics, as (heading, (head, rows)) of the report."""
     metrics = [(k, "not run" if v is None else f"{v:.4g}") for k, v in d["metrics"].items()]
-    law = law_rows(d["final"]["law"], d["final"].get("starting_torque_basis"))
+    law = law_rows(d["final"]["law"], d["final"].get("derived", {}).get("starting_torque_basis"))
     return [("Fitted law (wave-generator shaft)", (("term", "value", "unit"), law)),
             ("Metrics", (("metric", "value"), metrics))]
 

@@ -39,7 +39,7 @@ FOLLOW_MIN = 0.5
 NOISE_WARN, NOISE_FAIL = 0.05, 0.3
 #: identity checks: a fail means the record is not the test it claims
 IDENTITY = ("twist_span", "angle_follows_torque", "kinematic_error_not_zero", "ratio_consistent", "turns_steadily",
-            "holds_without_slipping", "broke_away")
+            "torque_varies", "holds_without_slipping", "broke_away")
 
 
 @dataclass(frozen=True)

@@ -334,6 +334,10 @@ def running_checks(meas, drive) -> tuple[list, dict]:
     torque = np.asarray(meas.torque, dtype=float)
     noise = noise_level(torque, meas.time)
     data = {"noise_floor_Nm": noise, "torque_noise_Nm": noise}
+    if np.ptp(torque) == 0.0:  # nothing to fit: a law of level 0 would leave no residual and no noise
+        return [Check("torque_varies", "fail", f"the torque is {float(torque[0]):.6g} N·m on every row: a "
+                      "channel that was not logged (or a placeholder), not a running torque")], \
+            {**data, "plateaus": 0, "speeds_rpm": [], "reversals": 0}
     _, _, segments = sweep_kinematics(meas.time, meas.wg_angle)
     checks = []
     starts = breakaway_episodes(meas.time, meas.wg_angle, torque)
