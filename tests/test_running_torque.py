@@ -247,7 +247,7 @@ def test_a_torque_channel_that_never_changes_is_the_wrong_test_and_its_json_hold
                             ratio=RATIO)
     checks, _, wrong = examine(meas, DriveScale.of(load_unit()))
     assert "0 N·m on every row" in wrong and any(c.check == "torque_varies" and c.status == "fail" for c in checks)
-    d = diagnose_running(record, [], max_rounds=0)
+    d = diagnose_running(law_record(FULL, fs=200.0), [], max_rounds=0)
     d.whiteness["rms_over_noise"] = math.inf  # as a residual over a zero floor gives it
     assert json.loads(json.dumps(d.to_json(), allow_nan=False))["whiteness"]["rms_over_noise"] is None
 
