@@ -212,6 +212,14 @@ def test_both_angles_that_contradict_the_ratio_are_said_to():
     assert checks["ratio_consistent"].message.startswith("the output turns 0.5 times the wave-generator angle")
 
 
+def test_a_misspelt_family_is_named_in_the_words_of_the_test_the_options_name(cli, tmp_path):
+    """``--effects stribeck,hardening`` with ``--test running_torque`` had been refused in the
+    stiffness test's words, naming the valid ``stribeck`` and not ``hardening``."""
+    code, _, stderr = cli("fit", "missing.csv", "--test", "running_torque", "--ratio", "100",
+                          "--effects", "stribeck,hardening", cwd=tmp_path)
+    assert code == 2 and "the hardening family acts in the elastic path" in stderr and "'stribeck'" not in stderr
+
+
 def test_effects_of_the_elastic_path_are_refused_for_a_sweep():
     assert parse_running_effects("stribeck,ripple") == ["friction", "ripple"]
     with pytest.raises(InputError, match="elastic path"):

@@ -51,8 +51,11 @@ def load_inputs(args):
     from hdsim.model.catalog import load_unit
 
     columns = parse_column_map(args.columns) if args.columns else None
-    # a misspelt family: one line, exit 2, before reading anything big (which kind's family
-    # it must be only the file says, so any kind's will do here)
+    # a misspelt family: one line, exit 2, before reading anything big. With --test the kind
+    # is known and says it in its own words (another kind's had named a valid family of this
+    # one); without, which kind's family it must be only the file says, so any kind's will do
+    if args.test:
+        test_kind(args.test).parse_effects(args.effects)
     errors = []
     for kind in test_kinds().values():
         try:
