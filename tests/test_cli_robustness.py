@@ -200,6 +200,18 @@ def test_simulate_with_a_bad_scenario_name_writes_nothing(name, cli, tmp_path):
 # ---------------------------------------------------------------- 5. exit 2, not "internal error"
 
 
+@pytest.mark.parametrize("verb, option", [("fit", "--out"), ("fit", "--report"), ("diagnose", "--report"),
+                                          ("simulate", "--out"), ("sobol", "--out"), ("sobol", "--report"),
+                                          ("demo", "--out")])
+def test_an_empty_path_is_refused_not_taken_for_the_default(verb, option, cli, record, capsys):
+    """``--out ''`` had written to the default place, as if the option had not been given."""
+    data = {"fit": [record.name], "diagnose": [record.name], "simulate": ["lost_motion"], "sobol": [], "demo": []}
+    with pytest.raises(SystemExit) as stopped:  # the option parser's refusal, as for any malformed option
+        cli(verb, *data[verb], option, "", cwd=record.parent)
+    assert stopped.value.code == 2 and f"argument {option}: an empty path" in _one_line(capsys.readouterr().err)
+    assert _files(record.parent) == ["good.csv"]
+
+
 def test_fit_out_that_is_a_folder_is_refused(cli, record):
     (record.parent / "dir").mkdir()
     code, _, err = cli("fit", record.name, "--out", "dir", cwd=record.parent)

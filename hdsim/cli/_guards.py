@@ -7,6 +7,8 @@ refused with exit status 2 *before* the work, and nothing is left half written.
 
 from __future__ import annotations
 
+import argparse
+
 import math
 import os
 from pathlib import Path
@@ -39,6 +41,14 @@ def refuse_special_file(path: Path, option: str) -> None:
     if is_special_file(path):
         raise InputError(f"{option}: {path} is not a regular file (a device, pipe or socket), and a result "
                          "replaces its file when written; give a file name (to keep nothing, leave the option out)")
+
+
+def path_argument(text: str) -> str:
+    """An option's path as given, refused when empty: ``--out ''`` had written to the
+    default place as if the option had not been given (argparse's ``type=``)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("an empty path; give a file or folder name")
+    return text
 
 
 def check_output_file(path, option: str, data=None) -> Path:

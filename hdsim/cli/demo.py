@@ -6,7 +6,7 @@ import sys
 import time
 
 from hdsim.cli import _common, emit_json
-from hdsim.cli._guards import check_output_folder
+from hdsim.cli._guards import check_output_folder, path_argument
 from hdsim.model.catalog import load_unit
 from hdsim.model.datasheet import catalog_entry, default_unit
 from hdsim.scenarios.run import run_scenario
@@ -21,7 +21,7 @@ def register(subparsers) -> None:
                                           "stiffness test; write figures and HDF5 results to --out.")
     p.add_argument("--unit", default=None,
                    help=f"built-in unit (default {default_unit()}) or a drive file (.toml)")
-    p.add_argument("--out", default="hdsim-demo", help="output folder (default ./hdsim-demo)")
+    p.add_argument("--out", type=path_argument, default="hdsim-demo", help="output folder (default ./hdsim-demo)")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.set_defaults(func=main)
 

@@ -13,6 +13,8 @@ from __future__ import annotations
 import importlib.util
 import sys
 
+from hdsim.cli._guards import path_argument
+
 HELP = "find the effect families a measurement needs: rank, add the best, refit, repeat"
 
 
@@ -30,7 +32,7 @@ def register(subparsers) -> None:
                    help="built-in unit or drive file (TOML, see 'hdsim units --template') to start from "
                         "(default CSG-25-100)")
     add_import_arguments(p)
-    p.add_argument("--report", default=None, metavar="DIR",
+    p.add_argument("--report", type=path_argument, default=None, metavar="DIR",
                    help="write figures and an HTML/Markdown page of every step here")
     p.add_argument("--max-rounds", default=None, type=int, metavar="N",
                    help="add at most N families")

@@ -15,6 +15,8 @@ import math
 import sys
 from pathlib import Path
 
+from hdsim.cli._guards import path_argument
+
 HELP = "fit the model with the named effect families to a measurement file"
 
 
@@ -33,9 +35,9 @@ def register(subparsers) -> None:
                    help="built-in unit or drive file (TOML, see 'hdsim units --template') to start from "
                         "(default CSG-25-100)")
     add_import_arguments(p)
-    p.add_argument("--out", default=None, metavar="FILE",
+    p.add_argument("--out", type=path_argument, default=None, metavar="FILE",
                    help="where to write the fitted parameter set (default: DATA stem + .fit.toml)")
-    p.add_argument("--report", default=None, metavar="DIR",
+    p.add_argument("--report", type=path_argument, default=None, metavar="DIR",
                    help="write a self-contained page of the fit (index.html, index.md, figures) into DIR")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.set_defaults(func=run)

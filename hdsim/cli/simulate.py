@@ -6,7 +6,7 @@ import sys
 from pathlib import Path
 
 from hdsim.cli import _common, emit_json
-from hdsim.cli._guards import check_output_folder
+from hdsim.cli._guards import check_output_folder, path_argument
 from hdsim.model.catalog import load_unit
 from hdsim.scenarios.evaluator import EVALUATORS
 from hdsim.scenarios.run import run_scenario
@@ -24,7 +24,7 @@ def register(subparsers) -> None:
                    help="built-in unit (default CSG-25-100; see 'hdsim units') or a drive file "
                         "(a TOML file of datasheet figures; 'hdsim units --template')")
     _common.add_set_argument(p)
-    p.add_argument("--out", default="hdsim-out", help="output folder (default ./hdsim-out)")
+    p.add_argument("--out", type=path_argument, default="hdsim-out", help="output folder (default ./hdsim-out)")
     p.add_argument("--no-figures", action="store_true", help="write the HDF5 result only")
     p.add_argument("--evaluator", choices=EVALUATORS, default="dynamic",
                    help="'dynamic' (default): solve_ivp on the full model, the reference; "

@@ -18,7 +18,7 @@ import sys
 import time
 from pathlib import Path
 
-from hdsim.cli._guards import check_output_file, check_output_folder
+from hdsim.cli._guards import check_output_file, check_output_folder, path_argument
 from hdsim.errors import InputError
 from hdsim.scenarios.evaluator import EVALUATORS
 
@@ -58,12 +58,12 @@ def register(subparsers) -> None:
     p.add_argument("--executor", default="local", help="local (default) or dask://HOST:PORT")
     p.add_argument("--workers", default="2", help="local processes (1 = in-process)")
     p.add_argument("--chunksize", default=None, help="rows per task (default: automatic)")
-    p.add_argument("--out", help="HDF5 study file; every finished sample is flushed to it")
+    p.add_argument("--out", type=path_argument, help="HDF5 study file; every finished sample is flushed to it")
     p.add_argument("--resume", action="store_true", help="continue (or extend N of) --out")
     p.add_argument("--retry-failed", action="store_true", help="with --resume: rerun failed rows")
     p.add_argument("--target-width", default=None,
                    help="double N up to --n until every 95 %% interval is narrower")
-    p.add_argument("--report", metavar="DIR", help="write figures and the summary here")
+    p.add_argument("--report", type=path_argument, metavar="DIR", help="write figures and the summary here")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.set_defaults(func=run)
 
