@@ -84,7 +84,12 @@ def test_refusals_that_differ_only_in_the_rows_values_are_one_reason():
 
     failures = [{"row": 2, "message": "refused: undercut depth h_p = 2 mm must be less than h_pz = 1 mm"},
                 {"row": 5, "message": "refused: undercut depth h_p = 3.5 mm must be less than h_pz = 1.2e-3 mm"},
-                {"row": 9, "message": "solver failed: step size below the minimum at t = 0.3 s"}]
-    assert failure_reasons(failures) == [
+                {"row": 9, "message": "solver failed: step size below the minimum at t = 0.3 s"},
+                {"row": 11, "message": "refused: hardening.e3 = 0.75 is outside [1, 100]"},
+                {"row": 12, "message": "refused: hardening.e2 = 0.5 is outside [1, 100]"},
+                {"row": 14, "message": "refused: hardening.e3 = -2 is outside [1, 100]"}]
+    assert failure_reasons(failures) == [  # the digit of a name is no number of the row's
         {"reason": failures[0]["message"], "rows": 2, "first_row": 2},
-        {"reason": failures[2]["message"], "rows": 1, "first_row": 9}]
+        {"reason": failures[2]["message"], "rows": 1, "first_row": 9},
+        {"reason": failures[3]["message"], "rows": 2, "first_row": 11},
+        {"reason": failures[4]["message"], "rows": 1, "first_row": 12}]

@@ -242,8 +242,8 @@ def failure_reasons(failures: list[dict]) -> list[dict]:
     return list(grouped.values())
 
 
-#: a number in a message (signed, decimal, exponent)
-_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+#: a number in a message (signed, decimal, exponent), not the digits of a name (``hardening.e2``, ``x1``)
+_NUMBER = re.compile(r"(?<![\w.])[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 
 
 def _report_failures(failures, store, log):
