@@ -34,6 +34,12 @@ def test_set_refuses_a_ball_count_that_is_not_whole_with_exit_2(cli):
         "hdsim compliance: error: wave_generator.balls = 20.5 must be a whole number of balls"]
 
 
+def test_a_count_just_off_a_whole_number_is_shown_as_it_was_given():
+    """Shown with ``:g`` it read "balls = 22 must be a whole number", contradicting itself."""
+    with pytest.raises(InputError, match=r"wave_generator.balls = 22.000001 must be a whole number of balls"):
+        hdsim.load_unit("CSG-25-100").with_updates({"wave_generator.balls": 22.000001})
+
+
 def test_a_fit_file_with_a_ball_count_that_is_not_whole_is_refused(tmp_path):
     path = tmp_path / "fitted.toml"
     path.write_text('format = "hdsim-fit-1"\nunit = "CSG-25-100"\n[parameters]\n"wave_generator.balls" = 20.5\n')

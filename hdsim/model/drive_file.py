@@ -222,7 +222,7 @@ def check_table(table: dict, source: str) -> dict:
     if out["ratio"] < 1.0:
         raise InputError(f"{source}: ratio must be at least 1, got {out['ratio']:g}")
     if not_whole(2.0 * out["ratio"]):  # the assumed proportions have 2N teeth (two-lobe wave generator)
-        raise InputError(f"{source}: ratio = {out['ratio']:g} means {2.0 * out['ratio']:g} flexspline teeth (2N), "
+        raise InputError(f"{source}: ratio = {out['ratio']:.12g} means {2.0 * out['ratio']:.12g} flexspline teeth (2N), "
                          "not a whole number; expected a ratio in steps of 0.5")
     if "flexspline" in table:
         dims = table["flexspline"]

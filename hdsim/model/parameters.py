@@ -56,7 +56,8 @@ def not_whole(value) -> np.ndarray:
 
 def whole_count_message(name: str, value: float, what: str) -> str:
     """The refusal of a count that is not whole, the same at every edge it enters by."""
-    return f"{name} = {value:g} must be a whole number of {what}"
+    # to twelve digits: a count 22.000001 shown as "22" would contradict its own refusal
+    return f"{name} = {value:.12g} must be a whole number of {what}"
 
 
 @functools.lru_cache(maxsize=None)
