@@ -4,6 +4,8 @@ Sobol' study's inputs (docs/nomenclature.md, docs/sensitivity.md §1)."""
 
 from __future__ import annotations
 
+import re
+
 import pytest
 
 import hdsim
@@ -38,6 +40,15 @@ def test_a_count_just_off_a_whole_number_is_shown_as_it_was_given():
     """Shown with ``:g`` it read "balls = 22 must be a whole number", contradicting itself."""
     with pytest.raises(InputError, match=r"wave_generator.balls = 22.000001 must be a whole number of balls"):
         hdsim.load_unit("CSG-25-100").with_updates({"wave_generator.balls": 22.000001})
+
+
+@pytest.mark.parametrize("value, told", [('"0.9e-3"', "str '0.9e-3'"), ("[20]", "list [20]"), ("true", "bool True")])
+def test_a_fit_file_value_that_is_no_number_is_refused_as_a_drive_file_refuses_it(value, told, tmp_path):
+    """A string had stopped load_fitted with an internal TypeError; a list or true was taken."""
+    path = tmp_path / "fitted.toml"
+    path.write_text(f'format = "hdsim-fit-1"\nunit = "CSG-25-100"\n[parameters]\n"wave_generator.balls" = {value}\n')
+    with pytest.raises(InputError, match=rf"parameters.wave_generator.balls must be a number, got {re.escape(told)}"):
+        load_fitted(path)
 
 
 def test_a_fit_file_with_a_ball_count_that_is_not_whole_is_refused(tmp_path):

@@ -281,6 +281,9 @@ def load_fitted(path) -> HarmonicDrive:
     else:
         raise InputError(f"{path}: [drive] must be a table of a drive file's keys, got {drive!r}")
     params = dict(params)
+    for key, value in params.items():  # as a drive file's: a string, a list or true is no value
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise InputError(f"{path}: parameters.{key} must be a number, got {type(value).__name__} {value!r}")
     slots = {}
     for family, effect_id in effects.items():
         if family not in fx.FAMILIES:
