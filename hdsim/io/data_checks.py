@@ -133,12 +133,17 @@ def _saturation(name: str, x, held=None) -> Check | None:
     ``held`` marks rows where an extreme value is the load as set (`braked_rows`), which do
     not count; those same rows of a clipped reading of a brake cannot be told from it by
     their values, and a kinematic-error row shows the drive in its angles either way.
+
+    A channel without noise on its other rows (a simulated record, a set load logged as
+    its set point) repeats any value it holds: repeats are then no sign of clipping. A
+    clipped channel is one whose noise stops at a rail.
     """
     x = np.asarray(x, dtype=float)
     held = np.zeros(x.size, dtype=bool) if held is None else held
     for value, end in ((np.max(x), "maximum"), (np.min(x), "minimum")):
         at = (x == value) & ~held
-        if np.count_nonzero(at) >= max(5, 0.01 * x.size) and np.ptp(x) > 0:
+        noisy = noise_level(x[x != value]) > 1e-9 * float(np.max(np.abs(x)))  # above round-off
+        if np.count_nonzero(at) >= max(5, 0.01 * x.size) and np.ptp(x) > 0 and noisy:
             return Check("saturation", "warn", f"the {name} sits at its {end} {value:.6g} for "
                          f"{np.count_nonzero(at)} rows ({100 * np.mean(at):.1f} %): clipped or saturated, "
                          "those rows do not show the drive")
