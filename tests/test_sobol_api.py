@@ -115,6 +115,23 @@ def test_a_study_that_would_not_be_the_one_asked_for_is_refused_before_it_runs(p
         hdsim.sobol("CSG-25-100", params, "lost_motion_arcmin", range=0.1, n=16, **options)
 
 
+@pytest.mark.parametrize("h_p, refused", [
+    # every corner builds; the end h_pz = 0.3 mm had been tried with the nominal undercut, 0.3175 mm,
+    # which lies outside the undercut's own range
+    ((0.1e-3, 0.25e-3), False),
+    ((0.25e-3, 0.5e-3), False),  # the end h_pz = 0.3 mm builds with the thinner undercuts
+    ((0.35e-3, 0.5e-3), True),   # no undercut in its range is thinner than 0.3 mm: no row builds
+])
+def test_a_range_end_is_refused_only_when_no_row_of_the_box_builds_it(h_p, refused):
+    bounds = {"h_pz": (0.3e-3, 1.2e-3), "h_p": h_p}
+    if refused:
+        with pytest.raises(InputError, match=r"the range of h_pz reaches 0.0003, a drive the model refuses: "
+                                             r"flexspline geometry: undercut depth h_p = 0.35 mm"):
+            from_unit("CSG-25-100", ["h_pz", "h_p"], OUTPUT, bounds=bounds)
+    else:
+        assert from_unit("CSG-25-100", ["h_pz", "h_p"], OUTPUT, bounds=bounds)[1].bounds[1] == h_p
+
+
 def test_the_files_beside_the_study_file_are_checked_before_the_study(tmp_path, cli):
     """With --out s.h5 the summary s.json goes beside it: a folder of that name had failed the
     finished study as an internal error, its figures left without their summary."""

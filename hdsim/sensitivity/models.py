@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import importlib
 
+import numpy as np
+
 from hdsim.errors import InputError
 from hdsim.sensitivity.functions import get_function
 from hdsim.sensitivity.problem import CLI_WORDING, build_problem
@@ -103,18 +105,69 @@ def _is_default_scenario(batch, output: str, given, resolved) -> bool:
 
 
 def _refuse_unbuildable_ends(drive, problem, dotted: list) -> None:
-    """Each end of a uniform range, the other parameters at their nominal values, is a drive
-    the model accepts: a range reaching a negative wall thickness had left three blocks in
-    four of the design to fail, and the indices described the corner that ran, not the
-    range asked for. (A combination of ends may still fail; those blocks are counted.)"""
-    for name, key, (low, high), dist in zip(problem.names, dotted, problem.bounds, problem.dists):
+    """Refuse a uniform range whose end no row of the study can build: every row with that
+    end, the other parameters anywhere in their own ranges (`_trial_rows`), is a drive the
+    model refuses. A range reaching a negative wall thickness had left three blocks in four
+    of the design to fail, and the indices described the corner that ran, not the range
+    asked for. The others are not held at their nominal values: a nominal outside its own
+    studied range (an undercut range below the nominal undercut) is no row of the study,
+    and had refused a box whose every corner builds. (A combination of ends may still fail;
+    those blocks are counted.)"""
+    spans = [_span(low, high, dist) for (low, high), dist in zip(problem.bounds, problem.dists)]
+    params = drive.params()
+    start = [min(max(float(np.asarray(params[key]).reshape(-1)[0]), lo), hi) for key, (lo, hi) in zip(dotted, spans)]
+    for i, (name, (low, high), dist) in enumerate(zip(problem.names, problem.bounds, problem.dists)):
         if dist != "unif":
             continue
         for value in (low, high):
-            try:
-                drive.with_updates({key: value}).require_consistent()
-            except InputError as exc:
-                raise InputError(f"the range of {name} reaches {value:g}, a drive the model refuses: {exc}") from None
+            reason = _refused_everywhere(drive, dotted, _trial_rows(spans, start, i, value))
+            if reason is not None:
+                raise InputError(f"the range of {name} reaches {value:g}, a drive the model refuses: {reason}")
+
+
+#: rows tried for one range end at most: every corner of the other ranges up to ten
+#: parameters, a fixed sample of the corners past that (each try is a fraction of a millisecond)
+MAX_TRIAL_ROWS = 512
+
+#: a normal input's reach, in standard deviations either side of its mean, for the rows tried
+NORMAL_REACH = 3.0
+
+
+def _span(a: float, b: float, dist: str) -> tuple[float, float]:
+    """The values an input's rows take: its bounds, or a normal's mean ± `NORMAL_REACH` SD."""
+    return (a - NORMAL_REACH * b, a + NORMAL_REACH * b) if dist == "norm" else (a, b)
+
+
+def _trial_rows(spans, start, i: int, value: float):
+    """Rows with input ``i`` at ``value``: first ``start`` (each nominal value brought into its
+    own range), then the corners of the other inputs' ranges. A model's bounds and geometry
+    rules compare parameters with limits and with each other, so a range end that builds with
+    any of the others' values builds at one of their corners."""
+    yield [*start[:i], value, *start[i + 1:]]
+    others = [j for j in range(len(spans)) if j != i]
+    if 2 ** len(others) <= MAX_TRIAL_ROWS:
+        corners = ((c >> np.arange(len(others))) & 1 for c in range(2 ** len(others)))
+    else:
+        corners = np.random.default_rng(0).integers(0, 2, size=(MAX_TRIAL_ROWS, len(others)))
+    for ends in corners:
+        row = list(start)
+        row[i] = value
+        for j, end in zip(others, ends):
+            row[j] = spans[j][int(end)]
+        yield row
+
+
+def _refused_everywhere(drive, dotted: list, rows) -> str | None:
+    """Why the model refuses the first of ``rows``, if it refuses every one; None once one builds."""
+    first = None
+    for row in rows:
+        try:
+            drive.with_updates(dict(zip(dotted, row))).require_consistent()
+        except InputError as exc:
+            first = str(exc) if first is None else first
+            continue
+        return None
+    return first
 
 
 def from_function(name, output=None):
