@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from hdsim.errors import InputError
-from hdsim.sensitivity import Ishigami, run_study
+from hdsim.sensitivity import Ishigami, ModelError, run_study
 from hdsim.sensitivity.store import DONE, PENDING
 
 F = Ishigami()
@@ -373,6 +373,33 @@ def test_resume_retry_failed_reruns_only_the_failed_rows(tmp_path, monkeypatch, 
     assert retried["failures"] == [] and retried["blocks_dropped"] == 0 and np.all(status == DONE)
     for key in KEYS:
         assert retried[key] == healthy[key], key
+
+
+class _RefusesACorner:
+    """Ishigami that refuses the rows with x1 > 2.5 as the simulator refuses a geometry:
+    NaN with a reason, every time it is asked."""
+
+    def __call__(self, X):
+        return self.explained(X)[0]
+
+    def explained(self, X):
+        refused = np.flatnonzero(X[:, 0] > 2.5)
+        return np.where(X[:, 0] > 2.5, np.nan, F(X)), {int(i): "refused: x1 above 2.5" for i in refused}
+
+
+def test_retrying_rows_the_model_refuses_again_is_no_broken_model(tmp_path):
+    """``--resume --retry-failed`` re-runs only the failed rows; that they fail again had been
+    judged alone, as a model failing on every row, and stopped the study. A model that ran
+    on no row of the study is still stopped."""
+    f, out = _RefusesACorner(), tmp_path / "s.h5"
+    first = run_study(f, F.problem(), 64, workers=1, out=out, progress=False, log=lambda line: None)
+    assert 0 < len(first.failures) < 256 and first.failures[0]["message"] == "refused: x1 above 2.5"
+    again = run_study(f, F.problem(), 64, workers=1, out=out, resume=True, retry_failed=True,
+                      progress=False, log=lambda line: None)
+    assert again.evaluated_now == len(first.failures) and again.failures == first.failures
+    with pytest.raises(ModelError, match="failed on all"):
+        run_study(lambda X: np.full(len(X), np.nan), F.problem(), 16, workers=1, progress=False,
+                  log=lambda line: None)
 
 
 # --------------------------------------------------------------------------- store I/O

@@ -25,8 +25,8 @@ from hdsim.sensitivity.design import fingerprint
 
 class ModelError(InputError):
     """The model is broken, not the physics: it raised a programming error, or failed on
-    every row tried so far. It is the user's model that fails, so the command line
-    reports it as bad input (exit status 2) with the first failure."""
+    every row tried so far of a study where it ran on none. It is the user's model that
+    fails, so the command line reports it as bad input (exit status 2) with the first failure."""
 
 
 #: exceptions that mean the model's code is wrong, whatever the row: abort at once instead
@@ -263,7 +263,7 @@ def _wait_for_a_worker(client, address: str) -> None:
 
 
 def evaluate(func, X, executor=None, *, workers=2, chunksize=None, rows=None,
-             on_chunk=None, progress=True, max_in_flight=None) -> Evaluation:
+             on_chunk=None, progress=True, max_in_flight=None, succeeded_before=0) -> Evaluation:
     """Evaluate ``func`` on the rows of ``X``; outputs land at their row positions.
 
     Parameters
@@ -292,6 +292,10 @@ def evaluate(func, X, executor=None, *, workers=2, chunksize=None, rows=None,
     max_in_flight : int, optional
         Most chunks submitted to ``executor`` at once (default 64), which keeps memory
         flat for huge designs.
+    succeeded_before : int
+        Rows of the same study that the model ran before this call (a study resumed):
+        a model that ran on any row does not fail everywhere, so failing again on rows
+        it had refused (``--resume --retry-failed``) does not stop the study.
 
     Returns
     -------
@@ -301,11 +305,18 @@ def evaluate(func, X, executor=None, *, workers=2, chunksize=None, rows=None,
     Raises
     ------
     ModelError
-        When the model fails on every row of the first few hundred.
+        When the model raises a programming error, or fails on every row of the first few
+        hundred and ran on no row of the study before (``succeeded_before``).
     """
     n = len(X)
     rows = np.arange(n) if rows is None else np.asarray(rows)
     out = Evaluation(np.full(n, np.nan), np.zeros(n, np.uint64), np.zeros(n, bool))
+
+    def collected(labels, y, key, errors):  # each chunk is written before the model is judged
+        if on_chunk is not None:
+            on_chunk(labels, y, key, errors)
+        _abort_if_broken(out, rows, succeeded_before)
+
     # a model may say what chunk suits it (the simulator batches rows inside one solve)
     size = int(chunksize or getattr(func, "chunksize", None) or default_chunksize(n))
     if executor is None and workers > 1:  # a small design still reaches every local worker
@@ -315,12 +326,12 @@ def evaluate(func, X, executor=None, *, workers=2, chunksize=None, rows=None,
     try:
         if executor is None and workers == 1:
             for s, e in spans:
-                _collect(out, s, e, run_chunk(func, _rows(X, s, e)), rows, on_chunk, bar)
+                _collect(out, s, e, run_chunk(func, _rows(X, s, e)), rows, collected, bar)
         elif executor is None:
             with local_pool(workers) as pool:
-                _run_pool(pool, func, X, spans, rows, out, on_chunk, bar, 4 * workers)
+                _run_pool(pool, func, X, spans, rows, out, collected, bar, 4 * workers)
         else:
-            _run_pool(executor, func, X, spans, rows, out, on_chunk, bar, max_in_flight or 64)
+            _run_pool(executor, func, X, spans, rows, out, collected, bar, max_in_flight or 64)
     finally:
         bar.close()
     return out
@@ -388,20 +399,23 @@ def _collect(out, s, e, result, rows, on_chunk, bar):
         out.failures[s + i] = msg
     out.evaluations += count
     out.completed += e - s
-    if on_chunk is not None:
-        on_chunk(rows[s:e], y, key, errors)
+    on_chunk(rows[s:e], y, key, errors)
     bar.update(e - s)
-    _abort_if_all_failed(out, rows)
 
 
-def _abort_if_all_failed(out, rows):
+def _abort_if_broken(out, rows, succeeded_before: int = 0):
+    """ModelError for a model that is broken, not one whose physics refuses some rows: a
+    programming error on any row, or every row failing, judged over the whole study. A
+    resumed study that re-runs only its failed rows (``--retry-failed``) sees nothing but
+    rows the model had refused; judged on those alone, a drive refusing a corner of its box
+    looked like a model failing everywhere."""
     for position, message in out.failures.items():
         if message.split(":", 1)[0] in PROGRAMMING_ERRORS:
             raise ModelError(f"the model raised {message} (row {rows[position]}): a bug in the model, "
                              "not its physics; fix it, then rerun with --resume --retry-failed")
     done = out.completed
     # Judge only once a few hundred rows are in; a whole failing region is possible.
-    if done >= min(len(out.y), 256) and len(out.failures) >= done:
+    if not succeeded_before and done >= min(len(out.y), 256) and len(out.failures) >= done:
         first = min(out.failures)
         raise ModelError(f"the model failed on all {done} rows evaluated so far "
                          f"(first: row {rows[first]}: {out.failures[first]}); "

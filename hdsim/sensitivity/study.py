@@ -126,7 +126,8 @@ def run_study(func, problem, n, *, seed=0, second_order=False, replicates=4, exe
         On a bad N, R, seed or target width, an existing ``out`` without ``resume``, a study
         file of another definition, or too few successful blocks.
     hdsim.sensitivity.evaluate.ModelError
-        When the model fails on every row of the first few hundred.
+        When the model fails on every row of the first few hundred and on every row of the
+        study before.
     """
     t0, log = time.perf_counter(), log or _stderr
     check_sizes(n, replicates)
@@ -144,9 +145,10 @@ def run_study(func, problem, n, *, seed=0, second_order=False, replicates=4, exe
         for n_stage in _stages(n, replicates, target_width):
             rows = store.pending(n_stage, retry_failed)
             if len(rows):
+                # the guard against a broken model judges the whole study, not the rows run now
                 ev = evaluate(func, store.reader(rows), executor, workers=workers,
                               chunksize=chunksize, rows=rows, on_chunk=store.write,
-                              progress=progress)
+                              progress=progress, succeeded_before=store.counts()["done"])
                 evaluated_now += ev.evaluations
             res, width = _analyse_store(store, n_stage, conf_level, num_resamples, seed)
             if target_width is not None:
