@@ -58,6 +58,44 @@ def test_out_writes_study_summary_and_figures(tmp_path, capsys, png_image):
     png_image(report / "sobol_indices.png")
 
 
+@pytest.fixture
+def quick_figures(monkeypatch):
+    """The figures as a few bytes each: which files a study leaves is the point, not the plots."""
+    from pathlib import Path
+
+    from hdsim.plotting import sensitivity
+
+    def write(path, *args, **kwargs):
+        Path(path).write_bytes(b"figure")
+        return Path(path)
+
+    monkeypatch.setattr(sensitivity, "plot_indices", write)
+    monkeypatch.setattr(sensitivity, "plot_convergence", write)
+
+
+def test_a_study_written_again_leaves_no_figure_of_the_last_one(tmp_path, capsys, quick_figures):
+    """A convergence figure of N = 64 had stayed beside the study resumed at N = 16 (which
+    draws none), and beside a --report into the folder of an earlier --out study; a study of
+    another stem in the folder, and a file hdsim did not write, are left alone."""
+    def study(n, *where):
+        assert main(["sobol", "--function", "ishigami", "--n", str(n), "--workers", "1",
+                     *where]) == 0, capsys.readouterr().err
+
+    def pngs():
+        return sorted(p.name for p in tmp_path.glob("*.png"))
+
+    study(64, "--out", str(tmp_path / "s.h5"))
+    study(64, "--out", str(tmp_path / "other.h5"))
+    (tmp_path / "mine_convergence.png").write_bytes(b"the user's")
+    assert pngs() == ["mine_convergence.png", "other_convergence.png", "other_indices.png",
+                      "s_convergence.png", "s_indices.png"]
+    study(16, "--out", str(tmp_path / "s.h5"), "--resume")
+    assert pngs() == ["mine_convergence.png", "other_convergence.png", "other_indices.png", "s_indices.png"]
+    study(64, "--out", str(tmp_path / "sobol.h5"))
+    study(16, "--report", str(tmp_path))  # the report's stem is 'sobol': the same files
+    assert "sobol_convergence.png" not in pngs() and "other_convergence.png" in pngs()
+
+
 @pytest.mark.parametrize("argv, fragment", [
     (["--function", "nope"], "unknown function 'nope'"),
     (["--function", "ishigami", "--n", "1000"], "power of 2"),

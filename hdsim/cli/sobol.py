@@ -85,7 +85,8 @@ def run(args) -> int:
         check_output_file(args.out, "--out")
     where = _summary_folder(args)
     if where is not None:  # the summary and the figures, into --report or beside the study file
-        check_output_folder(where[0], "--report" if args.report else "--out", names=_summary_files(where[1]))
+        check_output_folder(where[0], "--report" if args.report else "--out",
+                            names=(*_summary_files(where[1]), _summary_manifest(where[1])))
     # a broken model is ModelError (bad input, exit 2); anything else that fails here, a
     # broken process pool included, is the program's failure and reaches main (exit 1)
     func, problem, output, model, analytic = _resolve(args, models)
@@ -201,6 +202,14 @@ def _summary_files(stem: str) -> tuple[str, str, str]:
     return f"{stem}.json", f"{stem}_indices.png", f"{stem}_convergence.png"
 
 
+def _summary_manifest(stem: str) -> str:
+    """The manifest of the files a study's summary wrote (`hdsim.io.report_files`), named for
+    its stem: a study written again under that stem removes its own figure that it does not
+    write again (a convergence figure of a larger N), and never the files of a study of
+    another stem in the same folder."""
+    return f".hdsim-sobol-{stem}.json"
+
+
 def _write_outputs(args, summary, result, analytic, target) -> None:
     """Figures and the JSON summary: into ``--report DIR`` or next to ``--out``."""
     where = _summary_folder(args)
@@ -209,6 +218,7 @@ def _write_outputs(args, summary, result, analytic, target) -> None:
     folder, stem = where
     summary_name, indices_name, convergence_name = _summary_files(stem)
     from hdsim.atomic import write_text_atomic
+    from hdsim.io.report_files import replace_report_files
     from hdsim.plotting.sensitivity import plot_convergence, plot_indices
 
     names = list(result.problem.names)
@@ -219,9 +229,9 @@ def _write_outputs(args, summary, result, analytic, target) -> None:
                                      result.convergence, target, analytic))
     summary["figures"] = [str(f) for f in figs]
     write_text_atomic(folder / summary_name, json.dumps(summary, indent=1, allow_nan=False))
-    if args.report:  # a folder of its own: a convergence figure of an earlier study there is stale
-        from hdsim.io.report_files import replace_report_files
-
+    # the study's own files of the last time it was written here, not written again, are stale
+    replace_report_files(folder, [folder / summary_name, *figs], _summary_manifest(stem))
+    if args.report:  # a folder of its own: the files of an earlier report there are stale
         replace_report_files(folder, [folder / summary_name, *figs])
     # as `hdsim simulate` says what it wrote (on stderr: stdout may be the JSON)
     written = ([args.out] if args.out else []) + [str(folder / summary_name)] + summary["figures"]

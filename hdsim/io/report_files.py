@@ -8,7 +8,10 @@ while they are still the files hdsim wrote (same size and modification time): a 
 the user's, or one the user has since changed, stays.
 
 The manifest is ``.hdsim-report.json`` in the folder: ``{"format": "hdsim-report-files-1",
-"files": [{"name", "size", "mtime_ns"}, ...]}``, plain file names of the folder only.
+"files": [{"name", "size", "mtime_ns"}, ...]}``, plain file names of the folder only. A
+writer that shares its folder with others (a Sobol study's summary beside its study file,
+several studies to a folder) keeps a manifest of its own, named for what it writes
+(``manifest``), so that it removes only its own earlier files.
 """
 
 from __future__ import annotations
@@ -34,11 +37,12 @@ def _stamp(path: Path) -> dict | None:
     return {"name": path.name, "size": st.st_size, "mtime_ns": st.st_mtime_ns}
 
 
-def previous_files(folder: Path) -> list[dict]:
-    """The entries of the folder's manifest; none when it is missing or not one of ours (a
-    manifest edited by hand is no reason to remove anything). Only plain file names."""
+def previous_files(folder: Path, manifest: str = MANIFEST) -> list[dict]:
+    """The entries of the folder's manifest ``manifest``; none when it is missing or not one
+    of ours (a manifest edited by hand is no reason to remove anything). Only plain file
+    names, and never a manifest."""
     try:
-        data = json.loads((folder / MANIFEST).read_text(encoding="utf-8"))
+        data = json.loads((folder / manifest).read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, ValueError):
         return []
     if not isinstance(data, dict) or data.get("format") != FORMAT or not isinstance(data.get("files"), list):
@@ -48,7 +52,7 @@ def previous_files(folder: Path) -> list[dict]:
         if not isinstance(entry, dict):
             continue
         name = entry.get("name")
-        if isinstance(name, str) and name and name not in (".", "..", MANIFEST) and Path(name).name == name \
+        if isinstance(name, str) and name and name not in (".", "..", MANIFEST, manifest) and Path(name).name == name \
                 and os.sep not in name and "/" not in name:
             out.append(entry)
     return out
@@ -67,10 +71,11 @@ def stale_files(folder: Path, previous: list[dict], written: set[str]) -> list[P
     return out
 
 
-def replace_report_files(folder, written) -> list[Path]:
+def replace_report_files(folder, written, manifest: str = MANIFEST) -> list[Path]:
     """After a report has written ``written`` (paths) into ``folder``: remove the previous
     report's files it did not write again (`stale_files`), then record ``written`` as the
-    folder's manifest. Returns the files removed.
+    folder's manifest ``manifest`` (default the report folder's own). Returns the files
+    removed.
 
     The manifest is replaced last: a report stopped between the two leaves the old
     manifest, and the next report removes what it lists.
@@ -79,12 +84,12 @@ def replace_report_files(folder, written) -> list[Path]:
     mine = [Path(p) for p in written if Path(p).resolve().parent == folder.resolve()]
     names = {p.name for p in mine}
     removed = []
-    for path in stale_files(folder, previous_files(folder), names):
+    for path in stale_files(folder, previous_files(folder, manifest), names):
         try:
             path.unlink()
         except FileNotFoundError:
             continue
         removed.append(path)
     stamps = [s for s in (_stamp(folder / name) for name in sorted(names)) if s is not None]
-    write_text_atomic(folder / MANIFEST, json.dumps({"format": FORMAT, "files": stamps}, indent=1) + "\n")
+    write_text_atomic(folder / manifest, json.dumps({"format": FORMAT, "files": stamps}, indent=1) + "\n")
     return removed
