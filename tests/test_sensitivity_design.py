@@ -72,6 +72,30 @@ def test_additive_but_total_differs_flag():
     assert not checks["ok"]
 
 
+def test_an_additive_model_with_mispaired_rows_is_flagged():
+    """Each f(A) filed with the next base point's AB and B rows: ΣS1 stays near 1, every
+    ST grows far past its S1."""
+    from hdsim.sensitivity import Linear
+
+    f = Linear()
+    X = np.concatenate([sample_replicate(f.problem(), 64, replicate_seed(0, r), False) for r in range(4)])
+    blocks = f(X).reshape(-1, f.problem().num_vars + 2)
+    blocks[:, 0] = np.roll(blocks[:, 0], 1)
+    res = analyse(f.problem(), X, blocks.reshape(-1), second_order=False, replicates=4)
+    checks = consistency_checks(res["S1"], res["ST"], res["S1_conf_replicates"], res["ST_conf_replicates"])
+    assert any("looks additive" in flag for flag in checks["flags"]) and not checks["ok"]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_a_noisy_study_of_a_model_with_interactions_is_no_broken_design(seed):
+    """Ishigami (ΣS1 = 0.756) at N = 256: the replicate interval of ΣS1 reaches 1, and the
+    flag had called the model additive and its design broken (seeds 0, 1, 2, 4, 5)."""
+    X = _design(256, seed=seed)
+    res = analyse(P, X, F(X), second_order=False, replicates=4)
+    checks = consistency_checks(res["S1"], res["ST"], res["S1_conf_replicates"], res["ST_conf_replicates"])
+    assert checks["flags"] == [] and checks["ok"]
+
+
 class FailsOnOneRow:
     """Ishigami that raises on one chosen input row (or returns NaN)."""
 
