@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 from test_running_torque import FULL, law_record
 
@@ -55,3 +56,30 @@ def test_plateaus_on_the_top_of_the_rise_determine_it_and_one_level_is_one():
     (row,) = [p for p in sweep_predictions(fit, None) if p.label.startswith("starting torque")]
     assert row.label == "starting torque, both directions (one level)"
     assert row.method == "linear in the amplitudes" and row.high - row.low < 0.01
+
+
+def test_a_sweep_run_one_way_determines_nothing_of_the_other_direction():
+    # forward plateaus only, and a 30 ms back-off at the end (rows moving reverse, no plateau).
+    # Before, those rows gave the direction asymmetry a value and a band (the level and the
+    # asymmetry are one column forward): a reverse starting torque and running torque with
+    # bands, and an invented reverse level in the law written for a scenario
+    from test_running_torque import make_measurement
+
+    law = LAW.with_updates(coulomb_asymmetry=0.0)
+    t = np.arange(0.0, 3.0, 1e-2)
+    w = np.interp(t, [0.0, 0.1, 1.4, 1.5, 2.9, 2.93, 2.96, 3.0], [0.0, 2.0, 2.0, 40.0, 40.0, 0.0, -3.0, -3.0])
+    theta = np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * np.diff(t))])
+    torque = law.torque(w, theta) + np.random.default_rng(0).normal(0.0, 1e-3, t.size)
+    fit = fit_running(make_measurement("running_torque", t, torque, None, wg_angle=theta, ratio=100.0), ["friction"])
+    assert fit.law.coulomb_asymmetry == 0.0 and math.isinf(fit.uncertainty["friction.coulomb_asymmetry"])
+    summary = fit.summary()
+    derived = summary["derived"]
+    assert derived["starting_torque_reverse_Nm"] is None and derived["starting_torque_reverse_uncertainty_Nm"] is None
+    assert derived["starting_torque_forward_Nm"] == pytest.approx(derived["starting_torque_Nm"])
+    assert summary["uncertainty"]["friction.coulomb_asymmetry"] is None
+    assert "runs forward only" in summary["not_determined"]["friction.coulomb_asymmetry"]
+    assert "# friction.coulomb_asymmetry held at 0" in fit.to_toml()
+    rows = {p.label: p for p in sweep_predictions(fit, None)}
+    for label in ("running torque at 2000 rpm, reverse", "starting torque, reverse"):
+        assert rows[label].method.startswith(UNDETERMINED) and math.isnan(rows[label].low)
+    assert rows["running torque at 2000 rpm, forward"].method == "linear in the amplitudes"

@@ -165,13 +165,16 @@ def starting_torque_lines(derived: dict, shaft: str) -> list[str]:
     """A torque fit's starting torque as console lines: each way where the law is asymmetric
     (`hdsim.identification.sweep_start`), else its one level, and what it rests on."""
     lines = []
-    ways = [w for w in ("forward", "reverse") if derived.get(f"starting_torque_{w}_Nm") is not None] or [""]
+    # a way the record never runs is null: "not run"
+    ways = [w for w in ("forward", "reverse") if f"starting_torque_{w}_Nm" in derived] or [""]
     for way in ways if derived.get("starting_torque_Nm") is not None else ():
         key = f"starting_torque_{way}_" if way else "starting_torque_"
         value, sigma = derived[key + "Nm"], derived.get(key + "uncertainty_Nm")
         label = f"starting torque {way} (the law at rest)" if way else "starting torque (the law at rest)"
-        shown = f"{value:.4g} N·m (not determined by the record)" if sigma is None else f"{value:.4g} ± {sigma:.2g} N·m"
-        lines.append(f"  {label:<42} {shown} on {shaft}")
+        shown = ("not run (not determined by the record)" if value is None
+                 else f"{value:.4g} N·m (not determined by the record)" if sigma is None
+                 else f"{value:.4g} ± {sigma:.2g} N·m")
+        lines.append(f"  {label:<42} {shown}" + ("" if value is None else f" on {shaft}"))
     if derived.get("starting_torque_basis"):
         lines.append(f"  starting torque: {derived['starting_torque_basis']}")
     return lines

@@ -219,9 +219,10 @@ def sweep_predictions(fit, scale) -> list[Prediction]:
     -------
     list of Prediction
         Running torque forward and reverse at 2000 rpm and the starting torque (each way
-        for a law with a direction asymmetry, else one), on the input (wave-generator)
-        shaft [N·m]; a starting torque the record does not determine has no band
-        (`hdsim.identification.sweep_start`).
+        for a law with a direction asymmetry or a record that runs one way, else one), on
+        the input (wave-generator) shaft [N·m]; a starting torque the record does not
+        determine has no band (`hdsim.identification.sweep_start`), nor has a figure of a
+        direction the record never runs.
     """
     from hdsim.identification.sweep_start import BREAKAWAY_TEST, starting_level, starting_levels, \
         starting_torque_undetermined
@@ -234,6 +235,8 @@ def sweep_predictions(fit, scale) -> list[Prediction]:
     figures += [(f"starting torque, {'both directions (one level)' if way == 'both' else way}",
                  lambda law, way=way: starting_level(law, way), starting) for way in starting_levels(fit)]
     extrapolated = starting_torque_undetermined(fit) is not None
+    # a direction without a plateau: the law's value there is its assumption (no asymmetry)
+    never = [way for way, d in (("forward", 1), ("reverse", -1)) if d not in fit.record.directions]
     coordinates = fit.coordinates
     if coordinates is not None:  # the figures are linear in the amplitudes: one step of each
         # an amplitude's own size (a micro-N·m when it is 0), as running_plausibility judges it
@@ -243,7 +246,9 @@ def sweep_predictions(fit, scale) -> list[Prediction]:
     for label, figure, datasheet in figures:
         value = figure(fit.law)
         low, high, method = np.nan, np.nan, "no covariance"
-        if extrapolated and label.startswith("starting torque"):
+        if any(label.endswith(way) for way in never):
+            method = f"{UNDETERMINED}: it never runs {never[0]} (the law has no direction asymmetry)"
+        elif extrapolated and label.startswith("starting torque"):
             method = f"{UNDETERMINED}: the law below the slowest plateau; {BREAKAWAY_TEST}"
         elif coordinates is not None:
             g = np.zeros(sd.size)

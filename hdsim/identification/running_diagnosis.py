@@ -111,7 +111,7 @@ class RunningTorqueTest(TestKind):
         summary = fit.summary()
         # derived: the inertia and the starting torque (each way, with its basis), as `hdsim fit` gives them
         return {"fitted": summary["fitted"], "uncertainty": summary["uncertainty"], "law": summary["law"],
-                "derived": summary["derived"]}
+                "derived": summary["derived"], "not_determined": summary["not_determined"]}
 
     def diagnosis_json(self, diagnosis) -> dict:
         summary = diagnosis.final.fit.summary()

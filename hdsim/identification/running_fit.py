@@ -117,7 +117,10 @@ class SweepRecord:
             raise InputError(f"{meas.source}: the drive never turns at a steady speed; a running-torque test "
                              "needs plateaus of constant speed (a friction sweep)")
         slowest = min(abs(s.speed) for s in segments)
-        moving = np.abs(speed) >= MOVING_FRACTION * slowest
+        # turning in a direction the record runs in: a ramp's stray row of the other sign on a
+        # one-way record is no run that way, and the law there has no level of its own
+        ways = [np.sign(s.speed) for s in segments]
+        moving = (np.abs(speed) >= MOVING_FRACTION * slowest) & np.isin(np.sign(speed), ways)
         torque = np.asarray(meas.torque, dtype=float) / side
         turns = float(np.ptp(meas.angle)) / (2.0 * math.pi)
         return cls(meas, speed, accel, torque, side, segments, moving, 0.05 * slowest,
@@ -126,6 +129,12 @@ class SweepRecord:
     @property
     def plateau_speeds(self) -> np.ndarray:
         return np.array([abs(s.speed) for s in self.segments])
+
+    @property
+    def directions(self) -> tuple[int, ...]:
+        """The directions the record runs in, by its plateaus (+1 forward, −1 reverse): a
+        ramp's stray row of the other sign is no run in that direction."""
+        return tuple(d for d in (1, -1) if any(np.sign(s.speed) == d for s in self.segments))
 
     def steady(self, direction: int) -> np.ndarray:
         """Rows on plateaus of one direction (+1 forward, −1 reverse)."""
@@ -249,6 +258,18 @@ class RunningFit(TorqueFit):
                          "whole turn of steady motion)") if speeds else (None, ""))
         return out
 
+    @property
+    def held_at_zero(self) -> dict:
+        """``family.name`` -> why: the amplitudes the record does not determine, held at 0 in the
+        law (a direction asymmetry on a record that runs one way; `RunningTerm.direction_columns`)."""
+        if len(self.record.directions) != 1:
+            return {}
+        run, other = ("forward", "reverse") if self.record.directions[0] > 0 else ("reverse", "forward")
+        why = (f"not determined by the record: it runs {run} only, where a direction asymmetry is the level "
+               f"itself; the law is written with none (the same level {other})")
+        terms = [self.record.term(form) for form in self.forms.values()]
+        return {f"{t.family}.{n}": why for t in terms for n in t.direction_columns}
+
     def law_table(self) -> dict:
         """The fitted law as a scenario's ``[input_friction]`` table (WG shaft, SI; rpm for ω_s)."""
         law = self.law
@@ -278,7 +299,9 @@ class RunningFit(TorqueFit):
             "bic": self.bic(),
             "n_params": self.n_params,
             "fitted": {k: float(v) for k, v in self.fitted.items()},
-            "uncertainty": {k: float(v) for k, v in self.uncertainty.items() if math.isfinite(v)},
+            # null: not determined by the record (an infinite variance)
+            "uncertainty": {k: float(v) if math.isfinite(v) else None for k, v in self.uncertainty.items()},
+            "not_determined": self.held_at_zero,
             "derived": {"inertia_kg_m2": float(self.inertia), **self.starting_torque()},
             "metrics": self.metrics(),
             "running_torque_basis": self.running_torque_basis(),
@@ -304,6 +327,7 @@ class RunningFit(TorqueFit):
                "fit": {"rows": self.n, "rmse_Nm": self.rmse_Nm, "n_params": self.n_params}}
         head = ("# hdsim running-torque fit. [input_friction] is on the wave-generator shaft and pastes into a\n"
                 "# driven scenario's [input_friction] table (docs/cli.md, hdsim fit).\n")
+        head += "".join(f"# {key} held at 0: {why}\n" for key, why in self.held_at_zero.items())
         return head + tomli_w.dumps(doc)
 
     def save(self, path) -> Path:
@@ -358,10 +382,14 @@ class RunningFit(TorqueFit):
 
 def _design(rec: SweepRecord, terms: list[RunningTerm], nonlinear: dict, widened: tuple = ()) -> tuple:
     """Columns of every term (and the other shapes of the ``widened`` families) plus the inertia
-    column: (owners, names, matrix, lower, upper); other shapes are owned by `SHAPE`."""
+    column: (owners, names, matrix, lower, upper); other shapes are owned by `SHAPE`. On a
+    record that runs one way a term's direction columns are left out (held at 0): there they
+    are the level's column, and a ramp's stray row of the other sign would pick their value."""
     owners, names, cols, lower, upper = [], [], [], [], []
+    one_way = len(rec.directions) == 1
     for term in terms:
-        parts = [(term, rec.columns(term, nonlinear.get(term.family)))]
+        own = rec.columns(term, nonlinear.get(term.family))
+        parts = [(term, _without(own, term.direction_columns) if one_way else own)]
         if term.family in widened:
             parts.append((SHAPE, rec.columns(term, nonlinear.get(term.family), other=True)))
         for owner, c in parts:
@@ -378,6 +406,15 @@ def _design(rec: SweepRecord, terms: list[RunningTerm], nonlinear: dict, widened
     lower.append(0.0)
     upper.append(math.inf)
     return owners, names, np.hstack(cols), np.array(lower), np.array(upper)
+
+
+def _without(columns, dropped: tuple):
+    """``columns`` without those named in ``dropped``."""
+    keep = [j for j, n in enumerate(columns.names) if n not in dropped]
+    if len(keep) == len(columns.names):
+        return columns
+    return replace(columns, names=tuple(columns.names[j] for j in keep), matrix=columns.matrix[:, keep],
+                   lower=tuple(columns.lower[j] for j in keep), upper=tuple(columns.upper[j] for j in keep))
 
 
 def bounded_lsq(A, y, lower, upper) -> np.ndarray:
@@ -459,8 +496,12 @@ def fit_running(record, families=(), rows=None, widened=()) -> RunningFit:
     sd = [] if cov is None else np.sqrt(np.maximum(np.diag(cov), 0.0))  # 1-σ of each amplitude
     coordinates = None if cov is None else SweepCoordinates(tuple(terms), tuple(owners), tuple(names),
                                                             dict(nonlinear), rec.velocity_scale, x.copy(), cov)
-    return RunningFit(rec, families, law, inertia, prediction, residual, use, n_params, fitted,
-                      {k: float(s) for k, s in zip(keys, sd)}, {t.family: t.id for t in terms[1:]}, coordinates)
+    uncertainty = {k: float(s) for k, s in zip(keys, sd)}
+    fit = RunningFit(rec, families, law, inertia, prediction, residual, use, n_params, fitted, uncertainty,
+                     {t.family: t.id for t in terms[1:]}, coordinates)
+    for key in fit.held_at_zero:  # left out of the design: 0 in the law, not determined
+        fitted[key], uncertainty[key] = 0.0, math.inf
+    return fit
 
 
 def _law_of(velocity_scale: float, terms, owners, names, x: np.ndarray, nonlinear: dict):
@@ -533,6 +574,11 @@ class SweepCoordinates:
     velocity_scale: float
     x: np.ndarray
     covariance: np.ndarray
+
+    @property
+    def keys(self) -> list[str]:
+        """``family.name`` of each coordinate, in the order of ``x`` and the covariance."""
+        return [f"{SHAPE if o is SHAPE else o.family}.{n}" for o, n in zip(self.owners, self.names)]
 
     def law(self, x) -> InputFriction | None:
         """The law with amplitudes ``x``; None where a term cannot hold them."""

@@ -134,16 +134,19 @@ def running_figures(diagnosis, folder, catalog_running_torque: float | None = No
 def running_sections(d: dict) -> list[tuple[str, tuple]]:
     """The fitted law and the sweep's metrics, as (heading, (head, rows)) of the report."""
     metrics = [(k, "not run" if v is None else f"{v:.4g}") for k, v in d["metrics"].items()]
-    law = law_rows(d["final"]["law"], d["final"].get("derived", {}).get("starting_torque_basis"))
+    law = law_rows(d["final"]["law"], d["final"].get("derived", {}).get("starting_torque_basis"),
+                   "friction.coulomb_asymmetry" in d["final"].get("not_determined", {}))
     return [("Fitted law (wave-generator shaft)", (("term", "value", "unit"), law)),
             ("Metrics", (("metric", "value"), metrics))]
 
 
-def law_rows(law: dict, starting_basis: str | None = None) -> list[tuple[str, str, str]]:
+def law_rows(law: dict, starting_basis: str | None = None,
+             one_way: bool = False) -> list[tuple[str, str, str]]:
     """A fit's law table (`RunningFit.law_table`) as a reader's rows: 4 significant digits,
     and the ripple as torques [N·m] (the table keeps them as fractions of the level);
     ``starting_basis`` (`hdsim.identification.sweep_start`) follows a starting torque the
-    record does not determine."""
+    record does not determine; ``one_way``: the asymmetry is held at 0, not determined
+    (`RunningFit.held_at_zero`)."""
     def shown(values):
         return ", ".join(f"{float(v):.4g}" for v in values) if values else "none"
 
@@ -155,7 +158,8 @@ def law_rows(law: dict, starting_basis: str | None = None) -> list[tuple[str, st
             ("Coulomb level F_c", shown([level]), "N·m"),
             ("Stribeck speed ω_s", shown([law["stribeck_speed_rpm"]]), "rpm"),
             ("viscous b", shown([law["viscous_Nms"]]), "N·m·s/rad"),
-            ("direction asymmetry Δ", shown([law["coulomb_asymmetry_Nm"]]), "N·m"),
+            ("direction asymmetry Δ", shown([law["coulomb_asymmetry_Nm"]])
+             + (" (not determined by the record: it runs one way)" if one_way else ""), "N·m"),
             ("ripple orders", shown(law["ripple_orders"]), "per WG turn"),
             ("ripple amplitudes", shown([level * r for r in law["ripple_amplitudes_of_level"]]), "N·m"),
             ("ripple phases", shown(law["ripple_phases"]), "rad"),

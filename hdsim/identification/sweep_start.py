@@ -21,6 +21,9 @@ the one the catalog laws assume
 (`hdsim.model.input_friction.assumed_stribeck_speed`): a sweep that never ran that slow
 cannot say that nothing rises below its slowest plateau.
 
+A sweep that runs one way determines its starting torque that way only: the other is null
+(not run), and the law holds no direction asymmetry (`RunningFit.held_at_zero`).
+
 Otherwise the starting torque is the law's value with no uncertainty, "not determined by
 the record" (the convention of `hdsim.identification.predictions`), and the measurement
 that determines it is a breakaway ramp (``# test: breakaway``,
@@ -63,7 +66,12 @@ def starting_levels(fit) -> dict:
     """The fitted law's starting torque by direction [N·m, WG shaft]: ``{"forward": F_s + Δ,
     "reverse": F_s − Δ}``, or ``{"both": F_s}`` for a law with one level both ways or an
     asymmetry the record does not determine (a standard uncertainty not below it: two
-    levels would be an invented difference)."""
+    levels would be an invented difference). On a record that runs one way, that way's
+    ``F_s`` and None for the other: the record never runs it."""
+    ways = fit.record.directions
+    if len(ways) == 1:
+        run = "forward" if ways[0] > 0 else "reverse"
+        return {way: starting_level(fit.law, "both") if way == run else None for way in ("forward", "reverse")}
     delta = float(fit.law.coulomb_asymmetry)
     sigma = fit.uncertainty.get(ASYMMETRY)
     seen = delta != 0.0 and sigma is not None and math.isfinite(sigma) and sigma < abs(delta)
@@ -96,8 +104,7 @@ def _sigma(fit, weights: dict) -> float | None:
     coordinates = fit.coordinates
     if coordinates is None:
         return None
-    keys = list(fit.uncertainty)  # the amplitudes in the order of the covariance
-    g = np.array([weights.get(k, 0.0) for k in keys])
+    g = np.array([weights.get(k, 0.0) for k in coordinates.keys])
     used = g != 0.0
     variance = float(g[used] @ coordinates.covariance[np.ix_(used, used)] @ g[used])
     return math.sqrt(variance) if math.isfinite(variance) and variance >= 0.0 else None
@@ -123,10 +130,14 @@ def starting_torque_summary(fit) -> dict:
     out = {"starting_torque_Nm": side * float(fit.law.starting_torque),
            "starting_torque_uncertainty_Nm": sigma({LEVEL: 1.0, RISE: 1.0})}
     for way, sign in (("forward", 1.0), ("reverse", -1.0)):
-        if way in levels:
+        if way in levels and levels[way] is None:  # a direction the record never runs
+            out[f"starting_torque_{way}_Nm"] = out[f"starting_torque_{way}_uncertainty_Nm"] = None
+        elif way in levels:
             out[f"starting_torque_{way}_Nm"] = side * levels[way]
             out[f"starting_torque_{way}_uncertainty_Nm"] = sigma({LEVEL: 1.0, RISE: 1.0, ASYMMETRY: sign})
-    ways = ("each way: the law's direction asymmetry shifts its level at rest" if "both" not in levels
+    never = [way for way, level in levels.items() if level is None]
+    ways = (f"{never[0]} not run: the record determines neither its starting torque nor a direction asymmetry"
+            if never else "each way: the law's direction asymmetry shifts its level at rest" if "both" not in levels
             else "one level both ways: the law has no direction asymmetry" if fit.law.coulomb_asymmetry == 0.0
             else "one level both ways: the record does not determine the law's direction asymmetry")
     basis = reason or ("determined by the plateaus on the top of the Stribeck rise"

@@ -96,6 +96,10 @@ class RunningTerm(FamilyKnowledge):
     signature: ClassVar[str] = ""
     #: the unit of a column's amplitude where it is not a torque [N·m] (for reports)
     column_units: ClassVar[Mapping[str, str]] = MappingProxyType({})
+    #: amplitudes seen only as a difference between the directions: on a record that runs one
+    #: way their columns are the level's, and the fit holds them at 0 (`write_back` reads them
+    #: as 0 when absent)
+    direction_columns: ClassVar[tuple[str, ...]] = ()
 
     def grid(self, speeds: np.ndarray) -> tuple[float, ...]:
         """Values of the term's non-linear parameter to try (``()``: none)."""
@@ -151,6 +155,7 @@ class StribeckFriction(RunningTerm):
     family: ClassVar[str] = "friction"
     id: ClassVar[str] = "stribeck"
     signature: ClassVar[str] = "more torque at low speed; a level that depends on the direction"
+    direction_columns: ClassVar[tuple[str, ...]] = ("coulomb_asymmetry",)
     separated_by: ClassVar[Mapping[str, str]] = MappingProxyType({
         "damping": "a sweep over at least three speeds a decade apart: viscous loss grows with speed, a "
                    "Stribeck rise falls with it",
@@ -176,8 +181,9 @@ class StribeckFriction(RunningTerm):
                        np.column_stack([sign * np.exp(-x), sign / (1.0 + x * x)]), (0.0, 0.0), (math.inf, math.inf))
 
     def write_back(self, law, coefficients, nonlinear):
+        asymmetry = float(coefficients.get("coulomb_asymmetry", 0.0))  # absent: held at 0 (one way)
         return replace(law, starting_torque=law.coulomb_torque + float(coefficients["stribeck_rise"]),
-                       stribeck_speed=float(nonlinear), coulomb_asymmetry=float(coefficients["coulomb_asymmetry"]))
+                       stribeck_speed=float(nonlinear), coulomb_asymmetry=asymmetry)
 
 
 @dataclass(frozen=True)
