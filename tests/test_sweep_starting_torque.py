@@ -83,3 +83,24 @@ def test_a_sweep_run_one_way_determines_nothing_of_the_other_direction():
     for label in ("running torque at 2000 rpm, reverse", "starting torque, reverse"):
         assert rows[label].method.startswith(UNDETERMINED) and math.isnan(rows[label].low)
     assert rows["running torque at 2000 rpm, forward"].method == "linear in the amplitudes"
+
+
+def test_an_amplitude_zero_within_its_uncertainty_still_gives_a_linear_figure_its_band():
+    # a direction asymmetry of -4e-5 ± 9e-5 N·m (truth 0). Before, a coordinate whose standard
+    # uncertainty exceeds its value counted as undetermined, and the running torque at 2000 rpm,
+    # which moves with it, had no band; for a law linear in its amplitudes the band is exact
+    from hdsim.identification.predictions import CATALOG_SPEED, Z95
+
+    law = LAW.with_updates(coulomb_asymmetry=0.0)
+    fit = fit_running(law_record(law, speeds=(3.0, 30.0), fs=100.0, dwell_turns=1.0, noise=2e-3, seed=0), ["friction"])
+    delta, sigma = fit.fitted["friction.coulomb_asymmetry"], fit.uncertainty["friction.coulomb_asymmetry"]
+    assert 0.0 < abs(delta) < sigma  # the case: zero within its uncertainty
+    rows = {p.label: p for p in sweep_predictions(fit, None)}
+    forward = rows["running torque at 2000 rpm, forward"]
+    assert forward.method == "linear in the amplitudes"
+    # F_c + Δ + (rise, b: 0 at 2000 rpm): the band of the sum from the covariance
+    keys = fit.coordinates.keys
+    g = np.array([1.0 if k in ("base.coulomb_torque", "friction.coulomb_asymmetry") else 0.0 for k in keys])
+    g[keys.index("friction.stribeck_rise")] = math.exp(-(CATALOG_SPEED / fit.law.stribeck_speed) ** 2)
+    half = Z95 * math.sqrt(g @ fit.coordinates.covariance @ g)
+    assert (forward.high - forward.low) / 2 == pytest.approx(half, rel=1e-4)

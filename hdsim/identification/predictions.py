@@ -24,11 +24,14 @@ holds no plateaus slow enough to determine it (`hdsim.identification.sweep_start
 covariance takes the assumed shape of the Stribeck rise as known below the slowest plateau.
 
 A coordinate the record does not determine (an infinite variance,
-`hdsim.identification.optimizer.inverse_gram`, or a standard uncertainty larger than the
-value it stands for: the parameters the plausibility checks name) is outside the Gaussian
-approximation: draws of it would run drives the record never saw (a negative K1, a loss
+`hdsim.identification.optimizer.inverse_gram`, or, for a twist test's drive, a standard
+uncertainty larger than the value it stands for: the parameters the plausibility checks
+name) is outside the Gaussian approximation: draws of it would run drives the record never saw (a negative K1, a loss
 band that excludes the fitted value). A figure that moves with such a coordinate has no
 band (``"not determined by the record"``); one that does not is propagated from the others.
+A sweep's figures are linear in the amplitudes, so there only an infinite variance
+withholds a band: an amplitude zero within its uncertainty (a direction asymmetry of
+2·10⁻⁵ ± 2·10⁻⁵ N·m) widens the band by exactly what it may be.
 
 Every set of parameters of one test runs as one batch (`hdsim.scenarios.run.run_scenario`
 on a batch model) through the quasi-static evaluator: the drive was identified by
@@ -76,6 +79,19 @@ def _steps(covariance: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.nd
     variance = np.diag(covariance)
     undetermined = ~(variance <= scale ** 2)  # NaN and infinity included
     steps = np.where(undetermined, scale, np.sqrt(np.maximum(np.where(undetermined, 0.0, variance), 0.0)))
+    determined = np.where(undetermined[:, None] | undetermined[None, :], 0.0, covariance)
+    return steps, undetermined, determined
+
+
+def _linear_steps(covariance: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`_steps` for figures linear in the coordinates ``x``: only an infinite (or NaN)
+    variance is undetermined, and it steps by the coordinate's own size (a micro-unit at 0).
+    A finite variance larger than the value (an amplitude zero within its uncertainty) is a
+    Gaussian like any other here: ``±1.96 √(g Σ gᵀ)`` is exact for a linear figure."""
+    variance = np.diag(covariance)
+    undetermined = ~np.isfinite(variance)
+    steps = np.where(undetermined, np.maximum(np.abs(x), 1e-6), np.sqrt(np.maximum(np.where(undetermined, 0.0,
+                                                                                          variance), 0.0)))
     determined = np.where(undetermined[:, None] | undetermined[None, :], 0.0, covariance)
     return steps, undetermined, determined
 
@@ -239,8 +255,7 @@ def sweep_predictions(fit, scale) -> list[Prediction]:
     never = [way for way, d in (("forward", 1), ("reverse", -1)) if d not in fit.record.directions]
     coordinates = fit.coordinates
     if coordinates is not None:  # the figures are linear in the amplitudes: one step of each
-        # an amplitude's own size (a micro-N·m when it is 0), as running_plausibility judges it
-        sd, undetermined, covariance = _steps(coordinates.covariance, np.maximum(np.abs(coordinates.x), 1e-6))
+        sd, undetermined, covariance = _linear_steps(coordinates.covariance, coordinates.x)
         moved = {j: coordinates.law(coordinates.x + sd[j] * np.eye(sd.size)[j]) for j in np.flatnonzero(sd > 0)}
     out = []
     for label, figure, datasheet in figures:
