@@ -35,6 +35,8 @@ import numpy as np
 
 from hdsim.errors import InputError
 from hdsim.identification.optimizer import FittedRows, effective_n, inverse_gram
+from hdsim.identification.running_plausibility import running_plausibility
+from hdsim.identification.sweep_nonlinear import nonlinear_columns, refine_nonlinear
 from hdsim.io.measurement import Measurement
 from hdsim.io.running_checks import Segment, running_levels, sweep_kinematics
 from hdsim.model.input_friction import InputFriction
@@ -92,15 +94,19 @@ class SweepRecord:
     #: terms many times (candidates, hold-out halves, the Stribeck grid)
     cache: dict = field(default_factory=dict, repr=False)
 
-    def columns(self, term: RunningTerm, nonlinear, other: bool = False):
-        """The term's columns along the record (``other``: its other shapes, or None)."""
+    def columns(self, term: RunningTerm, nonlinear, other: bool = False, keep: bool = True):
+        """The term's columns along the record (``other``: its other shapes, or None);
+        ``keep`` False: not cached (a value off the grid, met once)."""
         key = (term, nonlinear, other)
-        if key not in self.cache:
-            meas = self.measurement
-            ratio = float(meas.ratio) if meas.ratio is not None else 1.0
-            make = term.other_shapes if other else term.columns
-            self.cache[key] = make(self.speed, meas.wg_angle, self.velocity_scale, ratio, nonlinear)
-        return self.cache[key]
+        if key in self.cache:
+            return self.cache[key]
+        meas = self.measurement
+        ratio = float(meas.ratio) if meas.ratio is not None else 1.0
+        make = term.other_shapes if other else term.columns
+        columns = make(self.speed, meas.wg_angle, self.velocity_scale, ratio, nonlinear)
+        if keep:
+            self.cache[key] = columns
+        return columns
 
     @classmethod
     def of(cls, meas: Measurement | SweepRecord) -> "SweepRecord":
@@ -380,7 +386,7 @@ class RunningFit(TorqueFit):
         return base.with_input_friction(law)
 
 
-def _design(rec: SweepRecord, terms: list[RunningTerm], nonlinear: dict, widened: tuple = ()) -> tuple:
+def _design(rec: SweepRecord, terms: list[RunningTerm], nonlinear: dict, widened: tuple = (), keep=True) -> tuple:
     """Columns of every term (and the other shapes of the ``widened`` families) plus the inertia
     column: (owners, names, matrix, lower, upper); other shapes are owned by `SHAPE`. On a
     record that runs one way a term's direction columns are left out (held at 0): there they
@@ -388,10 +394,10 @@ def _design(rec: SweepRecord, terms: list[RunningTerm], nonlinear: dict, widened
     owners, names, cols, lower, upper = [], [], [], [], []
     one_way = len(rec.directions) == 1
     for term in terms:
-        own = rec.columns(term, nonlinear.get(term.family))
+        own = rec.columns(term, nonlinear.get(term.family), keep=keep)
         parts = [(term, _without(own, term.direction_columns) if one_way else own)]
         if term.family in widened:
-            parts.append((SHAPE, rec.columns(term, nonlinear.get(term.family), other=True)))
+            parts.append((SHAPE, rec.columns(term, nonlinear.get(term.family), other=True, keep=keep)))
         for owner, c in parts:
             if c is None:
                 continue
@@ -470,15 +476,16 @@ def fit_running(record, families=(), rows=None, widened=()) -> RunningFit:
     y = rec.torque
     grids = {t.family: t.grid(rec.plateau_speeds) for t in terms if t.grid(rec.plateau_speeds)}
     choices = [dict(zip(grids, values)) for values in itertools.product(*grids.values())]
-    best = None
-    for nonlinear in choices:
-        owners, names, A, lo, hi = _design(rec, terms, nonlinear, tuple(widened))
+
+    def solve(nonlinear, keep=False):
+        owners, names, A, lo, hi = _design(rec, terms, nonlinear, tuple(widened), keep)
         x = _held_solution(rec, terms, owners, names, A[use], y[use], lo, hi, nonlinear)
         r = y[use] - A[use] @ x
-        rss = float(r @ r)
-        if best is None or rss < best[0]:
-            best = (rss, nonlinear, owners, names, A, x)
-    rss, nonlinear, owners, names, A, x = best
+        return float(r @ r), nonlinear, owners, names, A, x
+
+    best = min((solve(nonlinear, keep=True) for nonlinear in choices), key=lambda s: s[0])
+    # between the grid's points: the grid's nearest point can bias the rise (sweep_nonlinear)
+    rss, nonlinear, owners, names, A, x = refine_nonlinear(solve, grids, best)
     law = _law_of(rec.velocity_scale, terms, owners, names, x, nonlinear)
     inertia = float(x[-1])
     side = rec.side_factor
@@ -492,11 +499,17 @@ def fit_running(record, families=(), rows=None, widened=()) -> RunningFit:
     keys = [f"{SHAPE if o is SHAPE else o.family}.{n}" for o, n in zip(owners, names)]  # ``family.name``
     fitted = {k: float(v) for k, v in zip(keys, x)}
     fitted.update({f"{f}.stribeck_speed": float(v) for f, v in nonlinear.items()})
-    cov = _covariance(A[use], y[use] - A[use] @ x)
-    sd = [] if cov is None else np.sqrt(np.maximum(np.diag(cov), 0.0))  # 1-σ of each amplitude
-    coordinates = None if cov is None else SweepCoordinates(tuple(terms), tuple(owners), tuple(names),
-                                                            dict(nonlinear), rec.velocity_scale, x.copy(), cov)
+    # the amplitudes and ln ω of each non-linear parameter: its Jacobian column joins the design
+    jacobian = nonlinear_columns(lambda values: _design(rec, terms, values, tuple(widened), False)[2][use],
+                                 nonlinear, x)
+    cov = _covariance(np.column_stack([A[use], jacobian]) if nonlinear else A[use], y[use] - A[use] @ x)
+    sd = [] if cov is None else np.sqrt(np.maximum(np.diag(cov), 0.0))  # 1-σ of each coordinate
+    coordinates = None if cov is None else SweepCoordinates(
+        tuple(terms), tuple(owners), tuple(names), dict(nonlinear), rec.velocity_scale,
+        np.concatenate([x, np.log(list(nonlinear.values()))]), cov, tuple(nonlinear))
     uncertainty = {k: float(s) for k, s in zip(keys, sd)}
+    # ω's own: σ(ln ω)·ω
+    uncertainty.update({f"{f}.stribeck_speed": float(v * s) for (f, v), s in zip(nonlinear.items(), sd[len(keys):])})
     fit = RunningFit(rec, families, law, inertia, prediction, residual, use, n_params, fitted, uncertainty,
                      {t.family: t.id for t in terms[1:]}, coordinates)
     for key in fit.held_at_zero:  # left out of the design: 0 in the law, not determined
@@ -574,51 +587,17 @@ class SweepCoordinates:
     velocity_scale: float
     x: np.ndarray
     covariance: np.ndarray
+    #: the families whose ln ω follows the amplitudes in ``x`` (`hdsim.identification.sweep_nonlinear`)
+    log_nonlinear: tuple = ()
 
     @property
     def keys(self) -> list[str]:
         """``family.name`` of each coordinate, in the order of ``x`` and the covariance."""
-        return [f"{SHAPE if o is SHAPE else o.family}.{n}" for o, n in zip(self.owners, self.names)]
+        return ([f"{SHAPE if o is SHAPE else o.family}.{n}" for o, n in zip(self.owners, self.names)]
+                + [f"{f}.log_stribeck_speed" for f in self.log_nonlinear])
 
     def law(self, x) -> InputFriction | None:
-        """The law with amplitudes ``x``; None where a term cannot hold them."""
-        return _law_of(self.velocity_scale, self.terms, self.owners, self.names, x, self.nonlinear)
-
-
-def running_plausibility(fit: RunningFit, drive) -> list[dict]:
-    """The fitted law compared with the drive's catalog and with physics, as checks.
-
-    ``warn`` for a Coulomb level more than 30× the catalog running torque either way, a
-    law whose ripple and asymmetry exceed its level (it would deliver power: an offset or
-    a load larger than the friction), and each amplitude whose uncertainty exceeds it;
-    one ``ok`` when none is found.
-    """
-    out = []
-    law = fit.law
-    catalog = getattr(drive, "running_torque", 0.0)
-    if catalog and not catalog / 30.0 <= law.coulomb_torque + abs(law.coulomb_asymmetry) <= 30.0 * catalog:
-        out.append({"check": "friction_level", "status": "warn",
-                    "message": f"the fitted level {law.coulomb_torque:.3g} N·m on the input is "
-                               f"{law.coulomb_torque / catalog:.3g}× the catalog running torque of {drive.name}: "
-                               "another drive, the torque on the other shaft, or torque in other units"})
-    if not law.dissipative:
-        out.append({"check": "dissipative", "status": "warn",
-                    "message": f"the fitted asymmetry {law.coulomb_asymmetry:.3g} N·m and ripple exceed the level "
-                               f"{law.coulomb_torque:.3g} N·m: the torque keeps one sign in both directions, an "
-                               "offset or a load (gravity, a spring) larger than the friction"})
-    start = fit.starting_torque()
-    value, sigma = start["starting_torque_Nm"], start["starting_torque_uncertainty_Nm"]
-    if sigma is None:  # an extrapolation below the slowest plateau (`sweep_start`)
-        out.append({"check": "starting_torque", "status": "warn",
-                    "message": f"the starting torque {value:.3g} N·m is {start['starting_torque_basis']}"})
-    elif sigma > 0.5 * value:
-        out.append({"check": "starting_torque", "status": "warn",
-                    "message": f"the starting torque {value:.3g} ± {sigma:.2g} N·m: the sweep hardly determines "
-                               "it; a breakaway ramp (# test: breakaway) measures it"})
-    for name, value in fit.fitted.items():
-        sigma = fit.uncertainty.get(name, 0.0)
-        if abs(sigma) > abs(value) and abs(value) > 0:
-            out.append({"check": "uncertainty", "status": "warn",
-                        "message": f"{name} = {value:.3g} ± {sigma:.2g}: the sweep does not determine it"})
-    return out or [{"check": "plausibility", "status": "ok",
-                    "message": f"the fitted law is within what the catalog of {drive.name} and physics allow"}]
+        """The law with coordinates ``x``; None where a term cannot hold them."""
+        k = len(self.names)
+        nonlinear = {**self.nonlinear, **{f: math.exp(v) for f, v in zip(self.log_nonlinear, x[k:])}}
+        return _law_of(self.velocity_scale, self.terms, self.owners, self.names, x[:k], nonlinear)
