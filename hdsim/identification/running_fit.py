@@ -395,7 +395,7 @@ def _design(rec: SweepRecord, terms: list[RunningTerm], nonlinear: dict, widened
     one_way = len(rec.directions) == 1
     for term in terms:
         own = rec.columns(term, nonlinear.get(term.family), keep=keep)
-        parts = [(term, _without(own, term.direction_columns) if one_way else own)]
+        parts = [(term, own.without(term.direction_columns) if one_way else own)]
         if term.family in widened:
             parts.append((SHAPE, rec.columns(term, nonlinear.get(term.family), other=True, keep=keep)))
         for owner, c in parts:
@@ -412,15 +412,6 @@ def _design(rec: SweepRecord, terms: list[RunningTerm], nonlinear: dict, widened
     lower.append(0.0)
     upper.append(math.inf)
     return owners, names, np.hstack(cols), np.array(lower), np.array(upper)
-
-
-def _without(columns, dropped: tuple):
-    """``columns`` without those named in ``dropped``."""
-    keep = [j for j, n in enumerate(columns.names) if n not in dropped]
-    if len(keep) == len(columns.names):
-        return columns
-    return replace(columns, names=tuple(columns.names[j] for j in keep), matrix=columns.matrix[:, keep],
-                   lower=tuple(columns.lower[j] for j in keep), upper=tuple(columns.upper[j] for j in keep))
 
 
 def bounded_lsq(A, y, lower, upper) -> np.ndarray:

@@ -3,21 +3,16 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
-if TYPE_CHECKING:
-    from hdsim.identification.running_fit import RunningFit
-
 __all__ = ["running_plausibility"]
 
 
-def running_plausibility(fit: RunningFit, drive) -> list[dict]:
+def running_plausibility(fit, drive) -> list[dict]:
     """The fitted law compared with the drive's catalog and with physics, as checks.
 
     ``warn`` for a Coulomb level more than 30× the catalog running torque either way, a
     law whose ripple and asymmetry exceed its level (it would deliver power: an offset or
     a load larger than the friction), and each amplitude whose uncertainty exceeds it;
-    one ``ok`` when none is found.
+    one ``ok`` when none is found (``fit``: a `hdsim.identification.running_fit.RunningFit`).
     """
     out = []
     law = fit.law

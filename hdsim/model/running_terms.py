@@ -85,6 +85,14 @@ class Columns:
     lower: tuple[float, ...]
     upper: tuple[float, ...]
 
+    def without(self, dropped: tuple) -> Columns:
+        """These columns without those named in ``dropped``."""
+        keep = [j for j, n in enumerate(self.names) if n not in dropped]
+        if len(keep) == len(self.names):
+            return self
+        return replace(self, names=tuple(self.names[j] for j in keep), matrix=self.matrix[:, keep],
+                       lower=tuple(self.lower[j] for j in keep), upper=tuple(self.upper[j] for j in keep))
+
 
 @dataclass(frozen=True)
 class RunningTerm(FamilyKnowledge):
