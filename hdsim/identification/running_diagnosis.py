@@ -216,8 +216,10 @@ class RunningSession:
         return [first | ramps, second | ramps], [second, first]
 
     def fit_model(self, families, rows=None, widened=()):
-        """The law with ``families`` fitted on ``rows`` (default every moving row)."""
-        return fit_running(self.record, families, rows=rows, widened=widened)
+        """The law with ``families`` fitted on ``rows`` (default every moving row). A hold-out
+        fold's fit keeps the Stribeck grid's best point: it is judged only by its prediction of
+        the other half, and the refinement would cost it half again."""
+        return fit_running(self.record, families, rows=rows, widened=widened, refine=rows is None)
 
     def entry_forms(self, family: str) -> tuple:
         """The ids of the forms of ``family`` a candidate enters in (the best passing one stands

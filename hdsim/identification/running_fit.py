@@ -436,7 +436,7 @@ def bounded_lsq(A, y, lower, upper) -> np.ndarray:
     return sol.x / scale
 
 
-def fit_running(record, families=(), rows=None, widened=()) -> RunningFit:
+def fit_running(record, families=(), rows=None, widened=(), refine: bool = True) -> RunningFit:
     """Fit the running-torque law with the base and ``families`` to a sweep.
 
     Parameters
@@ -451,6 +451,9 @@ def fit_running(record, families=(), rows=None, widened=()) -> RunningFit:
         Families that may also take their other shapes (`RunningTerm.other_shapes`): the
         diagnosis's test for proxies. The law written back holds the law's forms only;
         ``prediction`` and ``residual`` include the other shapes.
+    refine : bool
+        Refine the Stribeck speed between the grid's points (`hdsim.identification.sweep_nonlinear`);
+        False keeps the best grid point, for a fit judged only by what it predicts (a hold-out fold).
 
     Returns
     -------
@@ -476,7 +479,7 @@ def fit_running(record, families=(), rows=None, widened=()) -> RunningFit:
 
     best = min((solve(nonlinear, keep=True) for nonlinear in choices), key=lambda s: s[0])
     # between the grid's points: the grid's nearest point can bias the rise (sweep_nonlinear)
-    rss, nonlinear, owners, names, A, x = refine_nonlinear(solve, grids, best)
+    rss, nonlinear, owners, names, A, x = refine_nonlinear(solve, grids, best) if refine else best
     law = _law_of(rec.velocity_scale, terms, owners, names, x, nonlinear)
     inertia = float(x[-1])
     side = rec.side_factor
