@@ -56,10 +56,8 @@ def load_inputs(args):
     # a misspelt family: one line, exit 2, before reading anything big. With --test the kind
     # is known and says it in its own words (another kind's had named a valid family of this
     # one); without, which kind's family it must be only the file says, so any kind's will do
-    if args.test:
-        test_kind(args.test).parse_effects(args.effects)
     errors = []
-    for kind in test_kinds().values():
+    for kind in [test_kind(args.test)] if args.test else test_kinds().values():
         try:
             kind.parse_effects(args.effects)
             break
