@@ -43,8 +43,9 @@ def test_a_manifest_that_is_not_hdsims_removes_nothing(tmp_path):
     (tmp_path / "keep.png").write_bytes(b"x")
     outside = tmp_path.parent / f"{tmp_path.name}-outside.png"
     outside.write_bytes(b"x")
-    entries = [{"name": n, "size": 1, "mtime_ns": (tmp_path / "keep.png").stat().st_mtime_ns}
-               for n in ("keep.png", f"../{outside.name}")]
+    # each entry with its own file's size and time: only the name may protect the file outside
+    entries = [{"name": n, "size": 1, "mtime_ns": path.stat().st_mtime_ns}
+               for n, path in (("keep.png", tmp_path / "keep.png"), (f"../{outside.name}", outside))]
     (tmp_path / MANIFEST).write_text(json.dumps({"format": "something else", "files": entries}))
     _page(tmp_path)
     assert (tmp_path / "keep.png").exists() and outside.exists()

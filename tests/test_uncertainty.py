@@ -52,5 +52,7 @@ def test_a_one_rate_damping_beside_friction_is_not_given_a_tight_uncertainty():
 
 def test_a_well_determined_fit_keeps_its_bands():
     result = hdsim.fit(DATA / "stiffness_example.csv", "friction,hardening")
-    for p in catalog_predictions(result):
+    predictions = catalog_predictions(result)
+    assert predictions  # an empty list would pass the loop
+    for p in predictions:
         assert p.method != UNDETERMINED and p.low <= p.value <= p.high

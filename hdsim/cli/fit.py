@@ -163,9 +163,10 @@ def starting_torque_lines(derived: dict, shaft: str) -> list[str]:
     """A torque fit's starting torque as console lines: each way where the law is asymmetric
     (`hdsim.identification.sweep_start`), else its one level, and what it rests on."""
     lines = []
-    # a way the record never runs is null: "not run"
+    # a way the record never runs is null: "not run"; no level at all, no lines of levels
+    has_level = derived.get("starting_torque_Nm") is not None
     ways = [w for w in ("forward", "reverse") if f"starting_torque_{w}_Nm" in derived] or [""]
-    for way in ways if derived.get("starting_torque_Nm") is not None else ():
+    for way in ways if has_level else []:
         key = f"starting_torque_{way}_" if way else "starting_torque_"
         value, sigma = derived[key + "Nm"], derived.get(key + "uncertainty_Nm")
         label = f"starting torque {way} (the law at rest)" if way else "starting torque (the law at rest)"

@@ -44,7 +44,8 @@ from hdsim.errors import InputError
 from hdsim.identification.engine import Candidate, Diagnosis, Step
 from hdsim.identification.policy import Thresholds
 from hdsim.identification.residuals import EXPLAINED_RATIO, whiteness
-from hdsim.identification.running_fit import SweepRecord, fit_running, running_plausibility
+from hdsim.identification.running_fit import SweepRecord, fit_running
+from hdsim.identification.running_plausibility import running_plausibility
 from hdsim.identification.test_kinds import TestKind, register_test_kind, test_kind
 from hdsim.io.measurement import Measurement
 from hdsim.model.running_terms import BASE_TERM, RUNNING_FAMILIES, RUNNING_FORMS, parse_running_forms

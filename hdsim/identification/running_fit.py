@@ -35,15 +35,14 @@ import numpy as np
 
 from hdsim.errors import InputError
 from hdsim.identification.optimizer import FittedRows, effective_n, inverse_gram
-from hdsim.identification.running_plausibility import running_plausibility
 from hdsim.identification.sweep_nonlinear import nonlinear_columns, refine_nonlinear
 from hdsim.io.measurement import Measurement
-from hdsim.io.running_checks import Segment, running_levels, sweep_kinematics
+from hdsim.io.running_checks import Segment, running_levels, shaft_sign, sweep_kinematics
 from hdsim.model.input_friction import InputFriction
 from hdsim.model.running_terms import BASE_TERM, RUNNING_FAMILIES, PositionRipple, RunningTerm, running_term, unit_law
 from hdsim.signals import noise_level
 
-__all__ = ["SweepRecord", "Segment", "TorqueFit", "RunningFit", "fit_running", "running_plausibility"]
+__all__ = ["SweepRecord", "Segment", "TorqueFit", "RunningFit", "fit_running"]
 
 #: owner of the columns of a family's other shapes (not in the law)
 SHAPE = "shape"
@@ -249,8 +248,8 @@ class RunningFit(TorqueFit):
     def _running_torques(self) -> dict:
         rec = self.record
         side = abs(rec.side_factor)
-        # with the sign of the WG's motion, as the levels are read (`running_checks.shaft_sign`)
-        measured = running_levels(np.sign(rec.side_factor) * np.asarray(self.measurement.torque, dtype=float),
+        # with the sign of the WG's motion, as the checks read the levels
+        measured = running_levels(shaft_sign(self.measurement) * np.asarray(self.measurement.torque, dtype=float),
                                   self.measurement.wg_angle, rec.segments)
         grid = np.linspace(0.0, 2.0 * math.pi, 72, endpoint=False)
         out = {}

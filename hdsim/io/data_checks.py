@@ -142,8 +142,8 @@ def _saturation(name: str, x, held=None) -> Check | None:
     held = np.zeros(x.size, dtype=bool) if held is None else held
     for value, end in ((np.max(x), "maximum"), (np.min(x), "minimum")):
         at = (x == value) & ~held
-        noisy = noise_level(x[x != value]) > 1e-9 * float(np.max(np.abs(x)))  # above round-off
-        if np.count_nonzero(at) >= max(5, 0.01 * x.size) and np.ptp(x) > 0 and noisy:
+        if (np.count_nonzero(at) >= max(5, 0.01 * x.size) and np.ptp(x) > 0
+                and noise_level(x[x != value]) > 1e-9 * float(np.max(np.abs(x)))):  # noise above round-off
             return Check("saturation", "warn", f"the {name} sits at its {end} {value:.6g} for "
                          f"{np.count_nonzero(at)} rows ({100 * np.mean(at):.1f} %): clipped or saturated, "
                          "those rows do not show the drive")

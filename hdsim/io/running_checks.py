@@ -333,11 +333,10 @@ def running_checks(meas, drive) -> tuple[list, dict]:
     """
     torque = np.asarray(meas.torque, dtype=float)
     noise = noise_level(torque, meas.time)
-    data = {"noise_floor_Nm": noise, "torque_noise_Nm": noise}
+    data = {"noise_floor_Nm": noise, "torque_noise_Nm": noise, "plateaus": 0, "speeds_rpm": [], "reversals": 0}
     if np.ptp(torque) == 0.0:  # nothing to fit: a law of level 0 would leave no residual and no noise
         return [Check("torque_varies", "fail", f"the torque is {float(torque[0]):.6g} N·m on every row: a "
-                      "channel that was not logged (or a placeholder), not a running torque")], \
-            {**data, "plateaus": 0, "speeds_rpm": [], "reversals": 0}
+                      "channel that was not logged (or a placeholder), not a running torque")], data
     _, _, segments = sweep_kinematics(meas.time, meas.wg_angle)
     checks = []
     starts = breakaway_episodes(meas.time, meas.wg_angle, torque)
@@ -345,11 +344,11 @@ def running_checks(meas, drive) -> tuple[list, dict]:
         checks.append(Check("turns_steadily", "fail", f"every start from rest ({len(starts)}) follows a torque "
                              f"raised over {min(s.rise_s for s in starts):.2g} s or more while the drive stood: "
                              "this looks like a breakaway test (--test breakaway), not a friction sweep"))
-        return checks, {**data, "plateaus": len(segments), "speeds_rpm": [], "reversals": 0}
+        return checks, {**data, "plateaus": len(segments)}
     if not segments:
         checks.append(Check("turns_steadily", "fail", "the drive never turns at a steady speed: this looks like "
                              "a locked (stiffness) or breakaway test, not a friction sweep"))
-        return checks, {**data, "plateaus": 0, "speeds_rpm": [], "reversals": 0}
+        return checks, data
     speeds = distinct_speeds(segments)
     reversals = int(sum(np.sign(a.speed) != np.sign(b.speed) for a, b in zip(segments, segments[1:])))
     data.update(plateaus=len(segments), speeds_rpm=[v * RPM_PER_RAD_S for v in speeds], reversals=reversals)

@@ -129,6 +129,8 @@ class Parameters:
                 object.__setattr__(self, name, float_if_scalar(raw))
         for name, what in count_fields(type(self)):
             value = getattr(self, name)
+            if type(value) is int or (type(value) is float and value.is_integer()):
+                continue  # the usual case, without numpy: a fit builds thousands of instances
             bad = np.atleast_1d(not_whole(value))
             if bad.any():
                 first = float(np.atleast_1d(value)[np.argmax(bad)])
