@@ -114,8 +114,8 @@ def _refuse_unbuildable_ends(drive, problem, dotted: list) -> None:
     and had refused a box whose every corner builds. (A combination of ends may still fail;
     those blocks are counted.)"""
     spans = [_span(low, high, dist) for (low, high), dist in zip(problem.bounds, problem.dists)]
-    params = drive.params()
-    start = [min(max(float(np.asarray(params[key]).reshape(-1)[0]), lo), hi) for key, (lo, hi) in zip(dotted, spans)]
+    nominal = _batch().nominal_values(drive, dotted)
+    start = [min(max(nominal[key], lo), hi) for key, (lo, hi) in zip(dotted, spans)]
     for i, (name, (low, high), dist) in enumerate(zip(problem.names, problem.bounds, problem.dists)):
         if dist != "unif":
             continue
@@ -159,14 +159,12 @@ def _trial_rows(spans, start, i: int, value: float):
 
 def _refused_everywhere(drive, dotted: list, rows) -> str | None:
     """Why the model refuses the first of ``rows``, if it refuses every one; None once one builds."""
-    first = None
+    refusal, first = _batch().refusal, None
     for row in rows:
-        try:
-            drive.with_updates(dict(zip(dotted, row))).require_consistent()
-        except InputError as exc:
-            first = str(exc) if first is None else first
-            continue
-        return None
+        reason = refusal(drive, dotted, row)
+        if reason is None:
+            return None
+        first = first or reason
     return first
 
 

@@ -199,6 +199,16 @@ def _refuse_counts(model: HarmonicDrive, dotted) -> None:
                              f"drive.with_updates)")
 
 
+def refusal(drive, dotted, values) -> str | None:
+    """Why the model refuses ``drive`` with the parameters ``dotted`` at ``values`` (None: it
+    builds): its bounds, its geometry rules and its consistency (T1 below T2)."""
+    try:
+        as_drive(drive).with_updates({n: float(v) for n, v in zip(dotted, values)}).require_consistent()
+    except InputError as exc:
+        return str(exc)
+    return None
+
+
 def nominal_values(drive, names) -> dict[str, float]:
     """Value of each named parameter in ``drive`` [SI unit of the parameter], keys as given.
 
@@ -292,11 +302,7 @@ class ScenarioMetric:
     def _refusal(self, row) -> str | None:
         """Why the model refuses one row's values (None: it builds). Built from floats, so
         the message names the values, not a sample of a batch of one."""
-        try:
-            as_drive(self.drive).with_updates({n: float(v) for n, v in zip(self.names, row)}).require_consistent()
-        except InputError as exc:
-            return str(exc)
-        return None
+        return refusal(self.drive, self.names, row)
 
     def _refusals(self, X) -> dict[int, str]:
         """Row -> why the model refuses it. The bound and geometry checks refuse a batch
