@@ -56,13 +56,14 @@ def refine_nonlinear(solve, grids: dict, best: tuple) -> tuple:
         low, high = values[max(i - 1, 0)], values[min(i + 1, values.size - 1)]
         if high <= low:
             continue
-        fixed = dict(best[1])
+        fixed, solved = dict(best[1]), {}
 
-        def cost(log_value, fixed=fixed, family=family):
-            return solve({**fixed, family: math.exp(log_value)})[0]
+        def cost(log_value, fixed=fixed, family=family, solved=solved):
+            solved[log_value] = solve({**fixed, family: math.exp(log_value)})  # the search's last is its answer
+            return solved[log_value][0]
 
         found = minimize_scalar(cost, bounds=(low, high), method="bounded", options={"xatol": REFINE_TOLERANCE})
-        trial = solve({**fixed, family: math.exp(float(found.x))})
+        trial = solved.get(found.x) or solve({**fixed, family: math.exp(float(found.x))})
         if trial[0] < best[0]:
             best = trial
     return best
