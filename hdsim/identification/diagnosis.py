@@ -84,10 +84,10 @@ from hdsim.errors import InputError, SolverError
 from hdsim.identification import breakaway, running_diagnosis  # noqa: F401  (register their test kinds)
 from hdsim.identification.confidence import diagnosis_confidence
 from hdsim.identification.engine import Candidate, Diagnosis, Step
-from hdsim.identification.optimizer import not_judged_reason, reproduces_contained
-from hdsim.identification.fit import (Evaluator, build_model, check_nested, fit, fit_many, make_problem,
-                                      parse_effects, result_of)
+from hdsim.identification.fit import (Evaluator, build_model, fit, fit_many, make_problem, parse_effects,
+                                      result_of)
 from hdsim.identification.folds import folds, one_loading_rate
+from hdsim.identification.optimizer import judge_nested
 from hdsim.identification.outcome import plausibility, twist_limits
 from hdsim.identification.problem import other_starts
 from hdsim.identification.residuals import findings, whiteness
@@ -308,10 +308,8 @@ class TwistSession:
             candidate = score_candidate(family, effect_id, res, step, self.kind.thresholds)
             if family not in step.effects:  # an added family holds the step's model (another form does not)
                 for cand_fit, base_fit in zip(res[1:], step.fold_fits):
-                    if not reproduces_contained(cand_fit, base_fit.rss):
-                        candidate.accepted, candidate.reason = False, not_judged_reason(cand_fit, base_fit.rss)
+                    if not judge_nested(candidate, cand_fit, base_fit.rss, f"{family}={effect_id} (hold-out fold fit)"):
                         break
-                    check_nested(cand_fit.rss, base_fit.rss, f"{family}={effect_id} (hold-out fold fit)")
             scored.append(candidate)
         return scored
 

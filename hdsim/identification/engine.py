@@ -16,7 +16,7 @@ import math
 import time
 from dataclasses import dataclass, field
 
-from hdsim.identification.optimizer import check_nested, not_judged_reason, reproduces_contained
+from hdsim.identification.optimizer import judge_nested
 from hdsim.identification.policy import RoundState, decide_round, wants_other_forms
 
 __all__ = ["Candidate", "Step", "Diagnosis", "run_diagnosis"]
@@ -232,12 +232,8 @@ def run_diagnosis(kind, session, pool: list, *, max_rounds: int | None = None, l
                   for form in session.entry_forms(family)]
         tried = session.try_models(step, trials, residual)
         for c in tried:  # a model holding the step's must fit at least as well: else a defect, not a finding
-            if c.fit is None:
-                continue
-            if not reproduces_contained(c.fit, step.fit.rss):
-                c.accepted, c.reason = False, not_judged_reason(c.fit, step.fit.rss)
-                continue
-            check_nested(c.fit.rss, step.fit.rss, f"{c.family}={c.effect} over {'+'.join(step.effects) or 'base'}")
+            if c.fit is not None:
+                judge_nested(c, c.fit, step.fit.rss, f"{c.family}={c.effect} over {'+'.join(step.effects) or 'base'}")
         step.candidates = _best_form_per_family(tried)
         say(f"round {state.round_no}: " + ", ".join(f"{c.family} {c.score:.1f}"
                                                     for c in sorted(step.candidates, key=lambda c: c.score)))

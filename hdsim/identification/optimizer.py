@@ -29,7 +29,7 @@ import numpy as np
 from hdsim.identification.problem import Evaluator, FitProblem
 
 __all__ = ["fit_many", "residuals", "bic", "lag1", "effective_n", "uncertainty", "FittedRows", "check_nested",
-           "reproduces_contained",
+           "reproduces_contained", "judge_nested",
            "NESTING_TOLERANCE"]
 
 
@@ -238,6 +238,17 @@ def reproduces_contained(fit, baseline_cost: float) -> bool:
         return True  # nothing to explain: a candidate is judged whatever its structure's path
     contained = getattr(fit, "contained_cost", None)
     return contained is None or contained <= baseline_cost * (1.0 + NESTING_TOLERANCE) + 1e-300
+
+
+def judge_nested(candidate, fit, baseline_cost: float, label: str) -> bool:
+    """Hold ``fit`` (a fit of ``candidate``'s model) to its contained model's ``baseline_cost``:
+    False, with ``candidate`` marked not judged, when it cannot be judged
+    (`reproduces_contained`); else True, once `check_nested` has found it no worse."""
+    if not reproduces_contained(fit, baseline_cost):
+        candidate.accepted, candidate.reason = False, not_judged_reason(fit, baseline_cost)
+        return False
+    check_nested(fit.rss, baseline_cost, label)
+    return True
 
 
 def not_judged_reason(fit, baseline_cost: float) -> str:
