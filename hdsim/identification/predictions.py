@@ -76,11 +76,7 @@ def _steps(covariance: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.nd
     ones): a coordinate whose standard deviation exceeds ``scale`` (its own size) is
     undetermined and steps by ``scale`` (enough to see whether a figure moves with it); a
     determined one steps by its standard deviation."""
-    variance = np.diag(covariance)
-    undetermined = ~(variance <= scale ** 2)  # NaN and infinity included
-    steps = np.where(undetermined, scale, np.sqrt(np.maximum(np.where(undetermined, 0.0, variance), 0.0)))
-    determined = np.where(undetermined[:, None] | undetermined[None, :], 0.0, covariance)
-    return steps, undetermined, determined
+    return _split(covariance, ~(np.diag(covariance) <= scale ** 2), scale)  # NaN and infinity included
 
 
 def _linear_steps(covariance: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -88,10 +84,14 @@ def _linear_steps(covariance: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np
     variance is undetermined, and it steps by the coordinate's own size (a micro-unit at 0).
     A finite variance larger than the value (an amplitude zero within its uncertainty) is a
     Gaussian like any other here: ``±1.96 √(g Σ gᵀ)`` is exact for a linear figure."""
-    variance = np.diag(covariance)
-    undetermined = ~np.isfinite(variance)
-    steps = np.where(undetermined, np.maximum(np.abs(x), 1e-6), np.sqrt(np.maximum(np.where(undetermined, 0.0,
-                                                                                          variance), 0.0)))
+    return _split(covariance, ~np.isfinite(np.diag(covariance)), np.maximum(np.abs(x), 1e-6))
+
+
+def _split(covariance, undetermined, undetermined_step) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(steps, ``undetermined``, the covariance of the determined coordinates): an undetermined
+    coordinate steps by ``undetermined_step``, a determined one by its standard deviation."""
+    variance = np.where(undetermined, 0.0, np.diag(covariance))
+    steps = np.where(undetermined, undetermined_step, np.sqrt(np.maximum(variance, 0.0)))
     determined = np.where(undetermined[:, None] | undetermined[None, :], 0.0, covariance)
     return steps, undetermined, determined
 
