@@ -72,10 +72,14 @@ def starting_levels(fit) -> dict:
     if len(ways) == 1:
         run = "forward" if ways[0] > 0 else "reverse"
         return {way: starting_level(fit.law, "both") if way == run else None for way in ("forward", "reverse")}
-    delta = float(fit.law.coulomb_asymmetry)
-    sigma = fit.uncertainty.get(ASYMMETRY)
-    seen = delta != 0.0 and sigma is not None and math.isfinite(sigma) and sigma < abs(delta)
+    seen = _determined(float(fit.law.coulomb_asymmetry), fit.uncertainty.get(ASYMMETRY))
     return {way: starting_level(fit.law, way) for way in (("forward", "reverse") if seen else ("both",))}
+
+
+def _determined(value: float, sigma) -> bool:
+    """Whether an amplitude is told from zero: not zero, with a finite standard uncertainty
+    below its size."""
+    return value != 0.0 and sigma is not None and math.isfinite(sigma) and sigma < abs(value)
 
 
 def starting_torque_undetermined(fit) -> str | None:
@@ -83,8 +87,7 @@ def starting_torque_undetermined(fit) -> str | None:
     when it does."""
     law = fit.law
     rise = float(fit.fitted.get(RISE, 0.0))
-    sigma = fit.uncertainty.get(RISE)
-    determined_rise = rise > 0.0 and sigma is not None and math.isfinite(sigma) and sigma < rise
+    determined_rise = rise > 0.0 and _determined(rise, fit.uncertainty.get(RISE))
     omega_s = float(law.stribeck_speed) if determined_rise else assumed_stribeck_speed()
     speeds = distinct_speeds(fit.record.segments)
     slow = [w for w in speeds if w <= SLOW_SHARE * omega_s]

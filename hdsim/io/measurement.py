@@ -412,12 +412,16 @@ def measurement_from_run(run, sample: int = 0, noise_rad: float = 0.0, seed: int
     t = np.asarray(run.result.t, dtype=float)
     noise = noise_rad * np.random.default_rng(seed).standard_normal(t.size) if noise_rad else 0.0
     params = run.model.params()
-    rated = float(np.ravel(params["drive.rated_torque"])[sample % np.size(params["drive.rated_torque"])])
+
+    def parameter(name):  # the sample's value of a batch's parameter (one value serves every sample)
+        return float(np.ravel(params[name])[sample % np.size(params[name])])
+
+    rated = parameter("drive.rated_torque")
     if run.scenario.setup == "locked_wave_generator":
         return make_measurement("stiffness", t, signal("torque_Nm"), signal("twist_rad") + noise,
                                 rated_torque=rated)
     if run.scenario.setup == "driven_wave_generator":
-        ratio = float(np.ravel(params["drive.ratio"])[sample % np.size(params["drive.ratio"])])
+        ratio = parameter("drive.ratio")
         return make_measurement("kinematic_error", t, signal("load_torque_Nm"), signal("output_angle_rad") + noise,
                                 wg_angle=signal("wg_angle_rad"), ratio=ratio, rated_torque=rated)
     raise InputError(f"a {run.scenario.setup} run gives no bench record")

@@ -217,8 +217,8 @@ class HarmonicDrive:
     def require_consistent(self) -> "HarmonicDrive":
         """This drive, or InputError naming the first effect whose values contradict each other
         (`Effect.inconsistency`): for the values a user gives (``--set``, a study's ranges)."""
-        for slot in SLOTS:
-            reason = getattr(self, slot).inconsistency()
+        for effect in self.effects().values():
+            reason = effect.inconsistency()
             if reason:
                 raise InputError(reason)
         return self

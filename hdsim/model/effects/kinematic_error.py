@@ -143,8 +143,7 @@ class FourierKinematicError(KinematicError):
     def from_linear(self, coefficients):
         pairs = np.asarray(coefficients, dtype=float).reshape(-1, 2)
         amplitudes, phases = np.hypot(pairs[:, 0], pairs[:, 1]), np.arctan2(pairs[:, 1], pairs[:, 0])
-        amp_names = [f"a{k}" for k in self.wg_orders] + ["a_out"]
-        phase_names = [f"p{k}" for k in self.wg_orders] + ["p_out"]
+        amp_names, phase_names = (list(names) for names in zip(*self._linear_names()))
         upper = self.param_meta()["a1"]["bounds"][1]
         clipped = [name for a, name in zip(amplitudes, amp_names) if a > upper]
         if clipped:  # beyond the physical bound: the record is not a kinematic error of this size
@@ -157,6 +156,10 @@ class FourierKinematicError(KinematicError):
             values[pn] = float(p)
         return type(self)(**values), values
 
+    def _linear_names(self) -> list[tuple[str, str]]:
+        """(amplitude, phase) parameter names of each order of `linear_basis`, in its order."""
+        return [(f"a{k}", f"p{k}") for k in self.wg_orders] + [("a_out", "p_out")]
+
     def linear_uncertainty(self, coefficients, covariance):
         """Amplitude ``a = √(s² + c²)`` [rad] and phase ``atan2(c, s)`` [rad] of each order
         from the covariance of its sine and cosine coefficients ``(s, c)``, to first order:
@@ -165,9 +168,8 @@ class FourierKinematicError(KinematicError):
         A zero amplitude has no phase to speak of: infinite."""
         pairs = np.asarray(coefficients, dtype=float).reshape(-1, 2)
         cov = np.asarray(covariance, dtype=float)
-        names = [(f"a{k}", f"p{k}") for k in self.wg_orders] + [("a_out", "p_out")]
         out = {}
-        for i, ((s, c), (a_name, p_name)) in enumerate(zip(pairs, names)):
+        for i, ((s, c), (a_name, p_name)) in enumerate(zip(pairs, self._linear_names())):
             block = cov[2 * i:2 * i + 2, 2 * i:2 * i + 2]
             a = math.hypot(s, c)
             if a == 0.0:
