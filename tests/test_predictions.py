@@ -87,3 +87,70 @@ def test_a_sweeps_running_torque_at_2000_rpm_has_the_band_of_its_linear_law():
     assert (forward.high - forward.low) / 2 == pytest.approx(half, rel=1e-6)
     assert forward.low < 0.05 + 2e-4 * w < forward.high  # the truth lies in the band
     assert forward.datasheet is None and forward.method == "linear in the amplitudes"
+
+
+# --------------------------------------------------------------------------- a model that misses an effect
+
+CAVEAT = "The model leaves structure in the residual"
+
+
+def _twist_fit(hardening: float):
+    """A 250-row ±T_N cycle of a spring whose twist at T_N is short of the linear one by the
+    fraction ``hardening`` (stiffer under load: hidden hardening unless 0), fitted with the
+    linear spring alone."""
+    t = np.linspace(0.0, 40.0, 250)
+    torque = RATED * np.sin(2 * np.pi * t / 20.0)
+    angle = torque / K * (1 - hardening * (torque / RATED) ** 2) + np.random.default_rng(3).normal(0.0, NOISE, t.size)
+    meas = Measurement(test="stiffness", time=t, torque=torque, angle=angle)
+    return fit(meas, [], unit=load_unit("CSG-25-100").with_effects(
+        **{family: _none(family) for family in ("hardening", "backlash", "friction", "damping")}))
+
+
+def _fit_page_text(result, folder) -> str:
+    from hdsim.identification.diagnosis import StiffnessTest
+    from hdsim.identification.report_page import fit_page
+
+    return (fit_page(result, folder, result.summary(), StiffnessTest()).parent / "index.md").read_text()
+
+
+def test_a_fit_that_misses_hardening_says_its_bands_assume_its_form(tmp_path):
+    """The spring fitted without the hardening the record holds: K1's band (wide as the
+    structured residual makes it) misses the true 31 000 N·m/rad, and the page says, beside
+    the bands, that the model leaves structure: the verdict's judgement and its rms ratio."""
+    from hdsim.identification.residuals import whiteness
+
+    result = _twist_fit(0.1)
+    w = whiteness(result.residual)
+    assert not w["explained"]
+    k1 = {p.label: p for p in catalog_predictions(result)}["K1"]
+    assert not k1.low <= K <= k1.high  # what the caveat is for
+    text = _fit_page_text(result, tmp_path)
+    line = next(line for line in text.splitlines() if CAVEAT in line)
+    assert f"rms {w['rms_over_noise']:.1f}× the noise floor" in line and "assume its form is right" in line
+    assert text.index("What the fitted drive predicts") < text.index(CAVEAT) < text.index("| K1 |")
+
+
+def test_a_fit_that_explains_its_record_shows_no_caveat(tmp_path):
+    text = _fit_page_text(_twist_fit(0.0), tmp_path)
+    assert "What the fitted drive predicts" in text and CAVEAT not in text
+
+
+@pytest.mark.parametrize("families, caveat", [(["damping"], False), ([], True)])
+def test_a_sweeps_predictions_carry_the_caveat_when_the_law_misses_an_effect(families, caveat):
+    """A sweep of a Coulomb level with viscous loss: fitted with damping its residual is
+    explained; fitted without it, the running torque at 2000 rpm comes with the caveat (the
+    running-torque verdict's judgement, against the record's model-free noise floor)."""
+    from test_running_torque import law_record
+
+    from hdsim.identification.report_page import Page, _predictions
+    from hdsim.identification.running_diagnosis import RunningTorqueTest
+    from hdsim.identification.running_fit import fit_running
+    from hdsim.model.input_friction import InputFriction
+
+    truth = InputFriction(starting_torque=0.05, coulomb_torque=0.05, viscous=2e-4, stribeck_speed=8.0,
+                          velocity_scale=0.05)
+    result = fit_running(law_record(truth, noise=1e-3, fs=300.0), families)
+    page = Page("sweep")
+    _predictions(page, RunningTorqueTest(), result, None)
+    text = page.markdown()
+    assert "running torque at 2000 rpm, forward" in text and (CAVEAT in text) is caveat

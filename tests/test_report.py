@@ -31,6 +31,13 @@ def test_outcome_and_checks_on_top_and_no_rate_plot_for_one_rate(tmp_path):
     assert all("residual_vs_rate" not in line for line in figures)
     html = (tmp_path / "index.html").read_text()
     assert html.index("Outcome: cannot decide") < html.index("Verdict:") < html.index("Before and after")
+    # beside the predictions, the verdict's own judgement and ratio (this record: rms 1.3× the floor)
+    verdict = next(line for line in md if line.startswith("Verdict: "))
+    assert verdict.startswith("Verdict: residual not white")
+    ratio = verdict.split(" rms ", 1)[1].split("×")[0]
+    caveat = next(line for line in md if "The model leaves structure" in line)
+    assert f"(rms {ratio}× the noise floor)" in caveat
+    assert md.index("## What the fitted drive predicts") < md.index(caveat)
 
 
 def test_the_page_says_how_to_reproduce_it_and_rounds_values_to_their_uncertainty(tmp_path):

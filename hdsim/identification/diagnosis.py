@@ -176,7 +176,7 @@ class TwistTest(TestKind):
 
     def fit_summary(self, result, stem, scale) -> dict:
         summary = result.summary()
-        summary["whiteness"] = whiteness(result.residual)
+        summary["whiteness"] = self.residual_whiteness(result)
         summary["findings"] = findings(result.measurement, result.residual)
         return summary
 

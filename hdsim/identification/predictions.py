@@ -33,6 +33,13 @@ A sweep's figures are linear in the amplitudes, so there only an infinite varian
 withholds a band: an amplitude zero within its uncertainty (a direction asymmetry of
 2·10⁻⁵ ± 2·10⁻⁵ N·m) widens the band by exactly what it may be.
 
+The covariance is the fit's own (`hdsim.identification.optimizer.covariance`): ``s² (JᵀJ)⁻¹``
+with ``s²`` the residual's variance, not the noise floor's, widened by ``n/n_eff`` for a
+correlated residual, so a band already grows with whatever the model leaves unexplained.
+What no band holds is the error of a wrong form: where the model leaves structure above the
+noise floor (the verdict's judgement, `hdsim.identification.residuals.whiteness`), a page
+says so beside the bands (`misfit_caveat`).
+
 Every set of parameters of one test runs as one batch (`hdsim.scenarios.run.run_scenario`
 on a batch model) through the quasi-static evaluator: the drive was identified by
 quasi-static fits (`hdsim.simulation.quasistatic`), so its parameters mean what that
@@ -214,6 +221,22 @@ def _metrics(model, coordinates, rows, scenario, metrics):
         return None
     size = 1 if rows is None else len(rows)
     return [np.broadcast_to(np.asarray(run.metrics[m], dtype=float).reshape(-1), (size,)) for m in metrics]
+
+
+def misfit_caveat(whiteness: dict) -> str:
+    """The sentence a page shows beside the bands of a model whose residual the verdict does
+    not call explained (``whiteness``: the dict the verdict reads,
+    `hdsim.identification.residuals.whiteness`: neither white nor within
+    `hdsim.identification.residuals.EXPLAINED_RATIO` of the noise floor); "" for one it does."""
+    if whiteness.get("explained", True):
+        return ""
+    ratio = whiteness.get("rms_over_noise")
+    told = f"rms {ratio:.1f}× the noise floor" if ratio is not None and np.isfinite(ratio) else "above the noise floor"
+    # not "too narrow by that much": s² is the residual's variance (structure included), so the
+    # band is already that much wider than the noise alone would make it; what it lacks is the
+    # error of the missing effect, which the fit gives no size for
+    return (f"The model leaves structure in the residual ({told}): these bands assume its form is right, "
+            "and the effect it misses can put the drive's true figures outside them.")
 
 
 #: the catalog's no-load running-torque speed of the input [rad/s] (2000 rpm)

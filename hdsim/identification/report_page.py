@@ -196,9 +196,14 @@ def _parameters(page: Page, fitted: dict, kind, result) -> None:
         page.heading(kind.parameters_heading).table(("parameter", "value ± standard uncertainty", "unit"), rows)
 
 
-def _predictions(page: Page, kind, fit, scale_numbers) -> None:
+def _predictions(page: Page, kind, fit, scale_numbers, whiteness: dict | None = None) -> None:
     """What the fitted drive predicts for the maker's tests, with 95 % bands
-    (`TestKind.predictions`); nothing for a kind without them."""
+    (`TestKind.predictions`), and beside them the caveat of a model the verdict does not call
+    explained (`hdsim.identification.predictions.misfit_caveat`; ``whiteness``: the dict the
+    page's verdict reads, default `TestKind.residual_whiteness` of ``fit``); nothing for a
+    kind without predictions."""
+    from hdsim.identification.predictions import misfit_caveat
+
     predictions = kind.predictions(fit, scale_numbers) if fit is not None else []
     if not predictions:
         return
@@ -221,6 +226,9 @@ def _predictions(page: Page, kind, fit, scale_numbers) -> None:
     page.heading("What the fitted drive predicts")
     page.text("The fitted drive put through the tests of the maker's datasheet, each with a 95 % band "
               "propagated from the fit's covariance.")
+    # on the pages only: neither `fit --json` nor `diagnose --json` carries the predictions (no key
+    # added to the JSON contract), and there the verdict and ``whiteness.explained`` say it already
+    page.text(misfit_caveat(kind.residual_whiteness(fit) if whiteness is None else whiteness), strong=True)
     page.table(("test", "fitted drive", "95 % band", "datasheet", "band by"), rows)
 
 
@@ -417,7 +425,7 @@ def diagnosis_page(diagnosis, folder, summary: dict, scale_numbers) -> Path:
     w = d["whiteness"]
     page.text(f"Ljung–Box Q = {w['ljung_box_q']:.1f}, p = {w['p_value']:.3g}." if "ljung_box_q" in w else "")
     _parameters(page, d.get("final") or {}, kind, diagnosis.final.fit)
-    _predictions(page, kind, diagnosis.final.fit, scale_numbers)
+    _predictions(page, kind, diagnosis.final.fit, scale_numbers, diagnosis.whiteness)  # the verdict's
     for heading, head_rows in kind.report_sections(diagnosis, d):
         page.heading(heading).table(*head_rows)
     figures = _common_figures(diagnosis, folder, unit, scale)

@@ -125,6 +125,9 @@ class RunningTorqueTest(TestKind):
                 f"{self.record_word} holds an effect that no {self.name.replace('_', '-')} family explains, or "
                 "explains only in part")
 
+    def residual_whiteness(self, fit) -> dict:
+        return _explained(fit, abs(fit.record.side_factor) * fit.record.noise_floor)  # `RunningSession.floor`
+
     def checks(self, meas, scale):
         # imported here: running_checks loads scipy.signal (about a second)
         from hdsim.io.running_checks import running_checks

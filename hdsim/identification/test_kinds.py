@@ -150,6 +150,13 @@ class TestKind:
                 f"{whiteness['rms_over_noise']:.1f}× the noise floor): the model still misses an effect "
                 "that no family in the library explains, or explains only in part; this is not a success")
 
+    def residual_whiteness(self, fit) -> dict:
+        """What `verdict` reads of ``fit``'s residual (`hdsim.identification.residuals.whiteness`):
+        for a fit's page, which has no diagnosis to ask."""
+        from hdsim.identification.residuals import whiteness
+
+        return whiteness(fit.residual)
+
     def prepare(self, meas) -> tuple[object, list]:
         """The record in the kind's conventions, and the checks that say what was changed
         (none by default); `hdsim.fit` and `hdsim.diagnose` fit the record it returns."""
