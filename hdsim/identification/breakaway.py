@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hdsim.errors import InputError, unknown_name
-from hdsim.identification.optimizer import inverse_gram
+from hdsim.identification.optimizer import inverse_gram, json_finite
 from hdsim.identification.running_diagnosis import RunningSession, RunningTorqueTest
 from hdsim.identification.running_fit import TorqueFit, bounded_lsq
 from hdsim.identification.test_kinds import TestKind, register_test_kind
@@ -182,7 +182,7 @@ class BreakawayFit(TorqueFit):
         rec = self.record
         return {"test": "breakaway", "torque_side": self.measurement.torque_side, "effects": list(self.families),
                 "rows": self.n, "starts": len(rec.starts), "fitted": self.fitted,
-                "uncertainty": {k: v if math.isfinite(v) else None for k, v in self.uncertainty.items()},
+                "uncertainty": json_finite(self.uncertainty),
                 "metrics": self.metrics(), "rmse_Nm": self.rmse_Nm,
                 "noise_floor_Nm": rec.noise_floor * abs(rec.side_factor),
                 "breakaways": [{"time_s": float(rec.measurement.time[s.onset]),

@@ -16,7 +16,7 @@ import math
 import time
 from dataclasses import dataclass, field
 
-from hdsim.identification.optimizer import judge_nested
+from hdsim.identification.optimizer import judge_nested, json_finite
 from hdsim.identification.policy import RoundState, decide_round, wants_other_forms
 
 __all__ = ["Candidate", "Step", "Diagnosis", "run_diagnosis"]
@@ -187,9 +187,7 @@ class Diagnosis:
                        for s in self.steps],
             "table": self.table(),
             "holdout": self.fold_rule,
-            # a ratio over a zero noise floor is infinite, which JSON has no number for
-            "whiteness": {k: None if isinstance(v, float) and not math.isfinite(v) else v
-                          for k, v in self.whiteness.items()},
+            "whiteness": json_finite(self.whiteness),
             "success": self.success,
             "verdict": self.verdict(),
             "findings": {"baseline": self.findings_before, "final": self.findings_after},

@@ -19,7 +19,6 @@ same effects are switched on.
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -27,7 +26,7 @@ import numpy as np
 
 from hdsim.errors import InputError, SolverError, unknown_name
 from hdsim.identification.optimizer import (FittedRows, bic, check_nested, covariance, effective_n, fit_many,
-                                           linear_covariance, residuals, uncertainty)
+                                           json_finite, linear_covariance, residuals, uncertainty)
 from hdsim.identification.problem import K0_NAME, Evaluator, FitProblem, make_problem, other_starts
 from hdsim.io.measurement import Measurement
 from hdsim.model import effects as fx
@@ -211,8 +210,7 @@ class FitResult(FittedRows):
             "offset_rad": self.offset,
             "params": {k: float(v) for k, v in self.params.items()},
             "fitted": {k: float(v) for k, v in self.internal.items()},
-            # None: the record does not determine it (an infinite variance, `optimizer.inverse_gram`)
-            "uncertainty": {k: float(v) if math.isfinite(v) else None for k, v in self.uncertainty.items()},
+            "uncertainty": json_finite(self.uncertainty),  # None: the record does not determine it
             "derived": {k: float(v) for k, v in self.derived.items()},
             "iterations": self.iterations,
             "converged": self.converged,

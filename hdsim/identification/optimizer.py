@@ -328,6 +328,12 @@ def inverse_gram(A: np.ndarray) -> np.ndarray:
     return out
 
 
+def json_finite(values: dict) -> dict:
+    """``values`` for JSON, which has no number for an infinite or undefined float: each such
+    float (a variance `inverse_gram` could not determine, a ratio over a zero floor) is None."""
+    return {k: (float(v) if math.isfinite(v) else None) if isinstance(v, float) else v for k, v in values.items()}
+
+
 def covariance(prob: FitProblem, r: np.ndarray) -> np.ndarray | None:
     """Covariance of the fitted coordinates ``u`` and the offset (last row and column),
     ``s² (JᵀJ)⁻¹`` (`inverse_gram`: infinite for what the record does not determine) widened

@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from hdsim.errors import InputError
-from hdsim.identification.optimizer import FittedRows, effective_n, inverse_gram
+from hdsim.identification.optimizer import FittedRows, effective_n, inverse_gram, json_finite
 from hdsim.identification.sweep_nonlinear import nonlinear_columns, refine_nonlinear
 from hdsim.io.measurement import Measurement
 from hdsim.io.running_checks import Segment, running_levels, shaft_sign, sweep_kinematics
@@ -304,8 +304,7 @@ class RunningFit(TorqueFit):
             "bic": self.bic(),
             "n_params": self.n_params,
             "fitted": {k: float(v) for k, v in self.fitted.items()},
-            # null: not determined by the record (an infinite variance)
-            "uncertainty": {k: float(v) if math.isfinite(v) else None for k, v in self.uncertainty.items()},
+            "uncertainty": json_finite(self.uncertainty),  # null: not determined by the record
             "not_determined": self.held_at_zero,
             "derived": {"inertia_kg_m2": float(self.inertia), **self.starting_torque()},
             "metrics": self.metrics(),
