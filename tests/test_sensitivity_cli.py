@@ -106,6 +106,8 @@ def test_a_study_written_again_leaves_no_figure_of_the_last_one(tmp_path, capsys
       "--bounds", "x1=zero:1"], "LO:HI"),
     (["--model", "hdsim.sensitivity.functions:Ishigami", "--params", "x1,x2",
       "--bounds", "x9=0:1"], "unknown parameter"),
+    # a misspelled drive parameter is named so, as the library does, not asked for its bounds
+    (["--unit", "CSG-25-100", "--params", "h_x", "--output", "lost_motion_arcmin"], "unknown parameter 'h_x'"),
     (["--function", "ishigami", "--executor", "spark://x"], "--executor"),
     (["--function", "ishigami", "--resume"], "--resume needs --out"),
     ([], "say what to study"),

@@ -126,7 +126,6 @@ def sobol(drive, params: str | Iterable[str] | TypedBounds, output: str, *, scen
     """
     names, given = study_bounds(params, bounds)
     frac = _fraction(range)
-    _check_names(drive, names)
     func, problem, output, model, _ = from_unit(drive, names, output, scenario, frac, given,
                                                 dict(dists or {}), wording=PYTHON_WORDING, evaluator=evaluator)
     options = dict(seed=seed, second_order=second_order, replicates=replicates,
@@ -194,11 +193,3 @@ def _fraction(range) -> float | None:
     if isinstance(range, bool) or not isinstance(range, numbers.Real) or not 0 < range < 10:
         raise bad  # NaN fails the comparison too
     return float(range)
-
-
-def _check_names(drive, names) -> None:
-    """An unknown parameter is refused before anything else, with the drive's close matches."""
-    # the simulator's interface loads scipy's solvers: imported for drive studies only
-    from hdsim.sensitivity.scenario_outputs import as_drive, resolve_names
-
-    resolve_names(as_drive(drive), names)

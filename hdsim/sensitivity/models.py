@@ -57,11 +57,12 @@ def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, 
         raise InputError("--unit studies need --output METRIC (e.g. lost_motion_arcmin)")
     batch = _batch()
     drive = batch.as_drive(unit)
+    dotted = batch.resolve_names(drive, names)  # once, first: an unknown name is refused before anything else
     # nominal values only matter for --range
     nominal = {} if range_frac is None else batch.nominal_values(drive, list(names))
-    bounds, dists = (_keyed_as_names(batch, drive, names, given) for given in (bounds, dists))
+    bounds, dists = (_keyed_as_names(batch, drive, dict(zip(dotted, names)), given) for given in (bounds, dists))
     problem = build_problem(names, nominal, range_frac, bounds, dists, wording or CLI_WORDING)
-    _refuse_unbuildable_ends(drive, problem, batch.resolve_names(drive, list(problem.names)))
+    _refuse_unbuildable_ends(drive, problem, dotted)
     # a built-in name travels as a name; anything else (a drive file too) as the model read
     # here, so the workers neither re-read a file nor depend on the working folder
     by_name = isinstance(unit, str) and "drive_file" not in drive.provenance
@@ -73,23 +74,18 @@ def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, 
     return func, problem, output, model, None
 
 
-def _keyed_as_names(batch, drive, names, options):
-    """``options`` (bounds or distributions by parameter) keyed as ``names`` are: ``h_c`` and
-    ``flexspline.h_c`` are one parameter, so either may name it in either place. A key that
-    is no parameter of the drive stays as written, for `build_problem` to name."""
-    if not options:
-        return options
-    try:
-        as_given = dict(zip(batch.resolve_names(drive, list(names)), names))
-    except InputError:
-        return options  # the names themselves are refused with their own message
+def _keyed_as_names(batch, drive, as_given, options):
+    """``options`` (bounds or distributions by parameter) keyed as the study's names are
+    (``as_given``: each by its dotted name): ``h_c`` and ``flexspline.h_c`` are one
+    parameter, so either may name it in either place. A key that is no parameter of the
+    drive stays as written, for `build_problem` to name."""
     out = {}
-    for key, value in options.items():
+    for key, value in (options or {}).items():
         try:
-            dotted = batch.resolve_names(drive, [key])[0]
+            key = as_given.get(batch.resolve_names(drive, [key])[0], key)
         except InputError:
-            dotted = key
-        out[as_given.get(dotted, key)] = value
+            pass
+        out[key] = value
     return out
 
 
