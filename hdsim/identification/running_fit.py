@@ -77,6 +77,9 @@ class SweepRecord:
         Model-free rms noise of the torque on the WG shaft [N·m].
     output_turns : float
         Span of the output angle [revolutions].
+    directions : tuple of int
+        The directions the record runs in, by its plateaus (+1 forward, −1 reverse): a
+        ramp's stray row of the other sign is no run in that direction.
     """
 
     measurement: Measurement
@@ -89,6 +92,7 @@ class SweepRecord:
     velocity_scale: float
     noise_floor: float
     output_turns: float
+    directions: tuple
     #: columns already computed, by (term, non-linear value): a diagnosis refits the same
     #: terms many times (candidates, hold-out halves, the Stribeck grid)
     cache: dict = field(default_factory=dict, repr=False)
@@ -122,24 +126,18 @@ class SweepRecord:
             raise InputError(f"{meas.source}: the drive never turns at a steady speed; a running-torque test "
                              "needs plateaus of constant speed (a friction sweep)")
         slowest = min(abs(s.speed) for s in segments)
+        ways = tuple(d for d in (1, -1) if any(np.sign(s.speed) == d for s in segments))
         # turning in a direction the record runs in: a ramp's stray row of the other sign on a
         # one-way record is no run that way, and the law there has no level of its own
-        ways = [np.sign(s.speed) for s in segments]
         moving = (np.abs(speed) >= MOVING_FRACTION * slowest) & np.isin(np.sign(speed), ways)
         torque = np.asarray(meas.torque, dtype=float) / side
         turns = float(np.ptp(meas.angle)) / (2.0 * math.pi)
         return cls(meas, speed, accel, torque, side, segments, moving, 0.05 * slowest,
-                   noise_level(torque, meas.time), turns)
+                   noise_level(torque, meas.time), turns, ways)
 
     @property
     def plateau_speeds(self) -> np.ndarray:
         return np.array([abs(s.speed) for s in self.segments])
-
-    @property
-    def directions(self) -> tuple[int, ...]:
-        """The directions the record runs in, by its plateaus (+1 forward, −1 reverse): a
-        ramp's stray row of the other sign is no run in that direction."""
-        return tuple(d for d in (1, -1) if any(np.sign(s.speed) == d for s in self.segments))
 
     def steady(self, direction: int) -> np.ndarray:
         """Rows on plateaus of one direction (+1 forward, −1 reverse)."""
