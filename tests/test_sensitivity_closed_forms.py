@@ -136,6 +136,19 @@ def test_a_quasistatic_outputs_resolution_is_at_least_its_distance_from_the_dyna
     assert metric.resolution(np.array([4e4, 4.2e4])) == pytest.approx(1e-6 * 4.1e4)
 
 
+def test_a_metric_keeps_the_gap_it_measures_in_a_choice_of_its_own_not_in_the_dict_it_was_given(monkeypatch):
+    # resolution() had written the gap into the caller's dict, which another metric then took for its own
+    from hdsim.sensitivity import scenario_outputs
+
+    monkeypatch.setattr(scenario_outputs, "_quasistatic_gap", lambda *args: 0.007)
+    given = {"chosen": "quasistatic", "figures": {"first_period_s": 0.01}}
+    metric = scenario_outputs.ScenarioMetric("CSG-25-100", ("flexspline.h_pz",), "transmission_accuracy_arcsec",
+                                             "kinematic_error", evaluator="quasistatic", choice=given)
+    assert metric.resolution(np.array([42.49, 42.50])) == pytest.approx(0.007)
+    assert given == {"chosen": "quasistatic", "figures": {"first_period_s": 0.01}}
+    assert metric.choice == {"chosen": "quasistatic", "figures": {"first_period_s": 0.01, "quasistatic_gap": 0.007}}
+
+
 @pytest.mark.slow
 def test_a_quasistatic_study_that_varies_less_than_the_evaluators_distance_from_the_dynamic_model_is_flagged():
     # the transmission accuracy moves by ~0.002 arcsec over a ±10 % box, through the

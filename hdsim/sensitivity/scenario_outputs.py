@@ -289,10 +289,12 @@ class ScenarioMetric:
         own = relative * float(np.mean(np.abs(finite))) if finite.size else 0.0
         if self.evaluator != "quasistatic":
             return own
-        figures = self.choice.setdefault("figures", {}) if self.choice is not None else {}
+        figures = dict((self.choice or {}).get("figures", {}))
         if "quasistatic_gap" not in figures:
             figures["quasistatic_gap"] = _quasistatic_gap(_single(as_drive(self.drive)), load_scenario(self.scenario),
                                                           self.output)
+            if self.choice is not None:  # a choice of its own: the dict it was given stays as it was
+                object.__setattr__(self, "choice", {**self.choice, "figures": figures})
         return max(own, figures["quasistatic_gap"])
 
     def _model(self, X):
