@@ -315,7 +315,7 @@ def evaluate(func, X, executor=None, *, workers=2, chunksize=None, rows=None,
     def collected(labels, y, key, errors):  # each chunk is written before the model is judged
         if on_chunk is not None:
             on_chunk(labels, y, key, errors)
-        _abort_if_broken(out, rows, succeeded_before)
+        _abort_if_broken(out, rows, labels, errors, succeeded_before)
 
     # a model may say what chunk suits it (the simulator batches rows inside one solve)
     size = int(chunksize or getattr(func, "chunksize", None) or default_chunksize(n))
@@ -403,15 +403,16 @@ def _collect(out, s, e, result, rows, on_chunk, bar):
     bar.update(e - s)
 
 
-def _abort_if_broken(out, rows, succeeded_before: int = 0):
+def _abort_if_broken(out, rows, labels, errors, succeeded_before: int = 0):
     """ModelError for a model that is broken, not one whose physics refuses some rows: a
     programming error on any row, or every row failing, judged over the whole study. A
     resumed study that re-runs only its failed rows (``--retry-failed``) sees nothing but
     rows the model had refused; judged on those alone, a drive refusing a corner of its box
-    looked like a model failing everywhere."""
-    for position, message in out.failures.items():
+    looked like a model failing everywhere. Called after each chunk (``labels``, ``errors``
+    by position in it): only the new chunk's failures are read, each once."""
+    for i, message in errors.items():
         if message.split(":", 1)[0] in PROGRAMMING_ERRORS:
-            raise ModelError(f"the model raised {message} (row {rows[position]}): a bug in the model, "
+            raise ModelError(f"the model raised {message} (row {labels[i]}): a bug in the model, "
                              "not its physics; fix it, then rerun with --resume --retry-failed")
     done = out.completed
     # Judge only once a few hundred rows are in; a whole failing region is possible.
