@@ -96,6 +96,26 @@ def test_a_study_written_again_leaves_no_figure_of_the_last_one(tmp_path, capsys
     assert "sobol_convergence.png" not in pngs() and "other_convergence.png" in pngs()
 
 
+def test_a_studys_files_are_listed_in_one_manifest_which_takes_them_over_from_the_other(tmp_path, capsys,
+                                                                                       quick_figures):
+    """A --report study had listed its files in the folder's manifest and again in its stem's;
+    now the --report folder's own lists them, an --out study's stem's beside it, and each takes
+    over what the other listed (removing the figure it no longer draws)."""
+    def listed(manifest):
+        path = tmp_path / manifest
+        return path.exists() and sorted(e["name"] for e in json.loads(path.read_text())["files"])
+
+    def study(n, *where):
+        assert main(["sobol", "--function", "ishigami", "--n", str(n), "--workers", "1", *where]) == 0
+        return listed(".hdsim-report.json"), listed(".hdsim-sobol-sobol.json")
+
+    three = ["sobol.json", "sobol_convergence.png", "sobol_indices.png"]
+    assert study(64, "--report", str(tmp_path)) == (three, False)
+    assert study(16, "--out", str(tmp_path / "sobol.h5")) == (False, ["sobol.json", "sobol_indices.png"])
+    assert not (tmp_path / "sobol_convergence.png").exists()
+    assert study(64, "--report", str(tmp_path)) == (three, False)
+
+
 @pytest.mark.parametrize("argv, fragment", [
     (["--function", "nope"], "unknown function 'nope'"),
     (["--function", "ishigami", "--n", "1000"], "power of 2"),

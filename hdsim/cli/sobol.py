@@ -86,7 +86,7 @@ def run(args) -> int:
     where = _summary_folder(args)
     if where is not None:  # the summary and the figures, into --report or beside the study file
         check_output_folder(where[0], "--report" if args.report else "--out",
-                            names=(*_summary_files(where[1]), _summary_manifest(where[1])))
+                            names=(*_summary_files(where[1]), _manifests(args, where[1])[0]))
     # a broken model is ModelError (bad input, exit 2); anything else that fails here, a
     # broken process pool included, is the program's failure and reaches main (exit 1)
     func, problem, output, model, analytic = _resolve(args, models)
@@ -202,12 +202,17 @@ def _summary_files(stem: str) -> tuple[str, str, str]:
     return f"{stem}.json", f"{stem}_indices.png", f"{stem}_convergence.png"
 
 
-def _summary_manifest(stem: str) -> str:
-    """The manifest of the files a study's summary wrote (`hdsim.io.report_files`), named for
-    its stem: a study written again under that stem removes its own figure that it does not
-    write again (a convergence figure of a larger N), and never the files of a study of
-    another stem in the same folder."""
-    return f".hdsim-sobol-{stem}.json"
+def _manifests(args, stem: str) -> tuple[str, str]:
+    """(the manifest that lists the files a study's summary wrote, the other that may list them
+    from before) (`hdsim.io.report_files`). Under --report the folder's own: a report written
+    there later removes them, as they replace an earlier report's. Else one named for the
+    stem: a study written again under that stem removes its own figure that it does not write
+    again (a convergence figure of a larger N), and never the files of a study of another
+    stem in the same folder."""
+    from hdsim.io.report_files import MANIFEST
+
+    stems = f".hdsim-sobol-{stem}.json"
+    return (MANIFEST, stems) if args.report else (stems, MANIFEST)
 
 
 def _write_outputs(args, summary, result, analytic, target) -> None:
@@ -229,10 +234,9 @@ def _write_outputs(args, summary, result, analytic, target) -> None:
                                      result.convergence, target, analytic))
     summary["figures"] = [str(f) for f in figs]
     write_text_atomic(folder / summary_name, json.dumps(summary, indent=1, allow_nan=False))
-    # the study's own files of the last time it was written here, not written again, are stale
-    replace_report_files(folder, [folder / summary_name, *figs], _summary_manifest(stem))
-    if args.report:  # a folder of its own: the files of an earlier report there are stale
-        replace_report_files(folder, [folder / summary_name, *figs])
+    # the files of the last report or study of this stem here, not written again, are stale
+    replace_report_files(folder, [folder / summary_name, *figs], *_manifests(args, stem),
+                         claimed=_summary_files(stem))
     # as `hdsim simulate` says what it wrote (on stderr: stdout may be the JSON)
     written = ([args.out] if args.out else []) + [str(folder / summary_name)] + summary["figures"]
     print(f"wrote {', '.join(written)}", file=sys.stderr)

@@ -11,7 +11,8 @@ The manifest is ``.hdsim-report.json`` in the folder: ``{"format": "hdsim-report
 "files": [{"name", "size", "mtime_ns"}, ...]}``, plain file names of the folder only. A
 writer that shares its folder with others (a Sobol study's summary beside its study file,
 several studies to a folder) keeps a manifest of its own, named for what it writes
-(``manifest``), so that it removes only its own earlier files.
+(``manifest``), so that it removes only its own earlier files. A file is listed in one
+manifest: a writer that may find its files listed in another (``other``) takes them over.
 """
 
 from __future__ import annotations
@@ -71,11 +72,17 @@ def stale_files(folder: Path, previous: list[dict], written: set[str]) -> list[P
     return out
 
 
-def replace_report_files(folder, written, manifest: str = MANIFEST) -> list[Path]:
+def replace_report_files(folder, written, manifest: str = MANIFEST, other: str | None = None,
+                         claimed=()) -> list[Path]:
     """After a report has written ``written`` (paths) into ``folder``: remove the previous
     report's files it did not write again (`stale_files`), then record ``written`` as the
     folder's manifest ``manifest`` (default the report folder's own). Returns the files
     removed.
+
+    ``other`` is another manifest of the folder that may list files of this writer's (those
+    named ``claimed``: a Sobol summary's are the report folder's under ``--report`` and its
+    stem's beside ``--out``, and one folder may be both): what it lists of them is a previous
+    file too, and its entries pass to ``manifest``, so that no file is listed twice.
 
     The manifest is replaced last: a report stopped between the two leaves the old
     manifest, and the next report removes what it lists.
@@ -83,13 +90,23 @@ def replace_report_files(folder, written, manifest: str = MANIFEST) -> list[Path
     folder = Path(folder)
     mine = [Path(p) for p in written if Path(p).resolve().parent == folder.resolve()]
     names = {p.name for p in mine}
+    theirs = previous_files(folder, other) if other else []
+    taken = [e for e in theirs if e["name"] in claimed]
     removed = []
-    for path in stale_files(folder, previous_files(folder, manifest), names):
+    for path in stale_files(folder, previous_files(folder, manifest) + taken, names):
         try:
             path.unlink()
         except FileNotFoundError:
             continue
         removed.append(path)
-    stamps = [s for s in (_stamp(folder / name) for name in sorted(names)) if s is not None]
-    write_text_atomic(folder / manifest, json.dumps({"format": FORMAT, "files": stamps}, indent=1) + "\n")
+    _record(folder, manifest, [s for s in (_stamp(folder / name) for name in sorted(names)) if s is not None])
+    if taken:
+        _record(folder, other, [e for e in theirs if e not in taken])
     return removed
+
+
+def _record(folder: Path, manifest: str, stamps: list[dict]) -> None:
+    """Write the manifest ``manifest`` listing ``stamps``; one that would list none goes."""
+    if not stamps:
+        return (folder / manifest).unlink(missing_ok=True)
+    write_text_atomic(folder / manifest, json.dumps({"format": FORMAT, "files": stamps}, indent=1) + "\n")
