@@ -136,16 +136,25 @@ def _run(spring, friction_step, damping, PH, PF, PD, k0, tg, Tg, tol_T, x_tol, m
                 S[i, j, :] = s
 
 
-@njit(types.float64[:, ::1](types.int64[::1], _ROW, _MATRIX, _READ_ROW, _ROW, FUNCTION_TYPES["gap_twist"], _MATRIX),
+@njit(types.float64[:, ::1](types.int64[::1], _ROW, _MATRIX, _READ_ROW, _READ_ROW, _F8, _ROW,
+                            FUNCTION_TYPES["gap_twist"], _MATRIX),
       cache=True, parallel=True, error_model="numpy")
-def _output(left, weight, E, T, k0, gap_twist, PB):
+def _output(left, weight, E, T, Tg, step_floor, k0, gap_twist, PB):
     M = E.shape[0]
     out = np.empty((M, T.size))
     for i in prange(M):
         compliance = 1.0 / k0[i]
         for n in range(T.size):
             g = left[n]
-            out[i, n] = E[i, g] + (E[i, g + 1] - E[i, g]) * weight[n] + gap_twist(T[n] * compliance, PB[i])
+            dT = Tg[g + 1] - Tg[g]
+            de = E[i, g + 1] - E[i, g]
+            # the sample's own torque through the branch's compliance, as
+            # `hdsim.simulation.quasistatic.branch_compliance`
+            c = compliance
+            if abs(dT) > step_floor:
+                c = min(max(de / dT, 0.0), compliance)
+            departure = T[n] - (Tg[g] + dT * weight[n])
+            out[i, n] = E[i, g] + de * weight[n] + departure * c + gap_twist(T[n] * compliance, PB[i])
     return out
 
 
@@ -187,14 +196,19 @@ def step_loop(laws: CompiledLaws, tg, Tg, tol_T, x_tol, max_iter, want_states):
     return E, (np.moveaxis(S, 2, 0) if want_states else None), failed
 
 
-def output_twist(laws: CompiledLaws, t, tg, e_grid, torque):
+def output_twist(laws: CompiledLaws, t, tg, e_grid, torque, step_floor: float = 0.0):
     """Output twist (M, n) at every sample: the body twist interpolated linearly from the
-    grid (as `numpy.interp`, row by row) plus the dead zone's angle at the sample's torque."""
+    grid (as `numpy.interp`, row by row) and moved by the sample's own torque through the
+    branch's compliance (`hdsim.simulation.quasistatic.branch_compliance`), plus the dead
+    zone's angle at the sample's torque; a torque step between two steps not above
+    ``step_floor`` [N·m] gives no secant."""
     t = np.asarray(t, dtype=float)
     tg = np.asarray(tg, dtype=float)
     # every row shares the grid (first and last sample included, >= 2 points): where each
     # sample falls and its weight, once
     left = np.clip(np.searchsorted(tg, t, side="right") - 1, 0, tg.size - 2).astype(np.int64)
     weight = (t - tg[left]) / (tg[left + 1] - tg[left])
-    return _output(left, weight, np.ascontiguousarray(e_grid), np.ascontiguousarray(torque, dtype=float),
-                   laws.k0, laws.gap_twist, laws.rows[3])
+    T = np.ascontiguousarray(torque, dtype=float)
+    Tg = np.ascontiguousarray(np.interp(tg, t, T))  # the torque at the steps
+    return _output(left, weight, np.ascontiguousarray(e_grid), T, Tg, step_floor, laws.k0, laws.gap_twist,
+                   laws.rows[3])
