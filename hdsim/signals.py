@@ -60,6 +60,9 @@ def noise_level(x, time=None) -> float:
     x = np.asarray(x, dtype=float)
     if x.size < NOISE_WINDOW:
         return 0.0
+    # about a level of its own: the weights' rounding on a large level (a constant 31.2 gave
+    # 6e-15 of "noise") would otherwise be read as noise; a constant then has none
+    x = x - np.median(x)
     half = NOISE_WINDOW // 2
     if time is not None and not evenly_sampled(time):
         residual, leverage = _local_cubic_in_time(x, np.asarray(time, dtype=float))
@@ -163,11 +166,15 @@ def glitches(x) -> np.ndarray:
 
 def smoothed(x, noise: float) -> tuple[np.ndarray, float]:
     """``x`` through a centred moving average long enough to bring ``noise`` well under its
-    swing, and the noise left on it (``noise / √width``) [unit of x]."""
+    swing, and the noise left on it (``noise / √width``) [unit of x]. A signal without swing
+    (a constant) is returned as it is."""
     x = np.asarray(x, dtype=float)
-    swing = max(float(np.ptp(x)), 1e-300)
+    swing = float(np.ptp(x))
+    if not swing > 0:
+        return x.copy(), noise
     # the window's noise is noise/√w; aim at 1 % of the swing, within 1 … n/50 samples
-    w = int(min(max((noise / (0.01 * swing)) ** 2, 1.0), max(x.size // 50, 1)))
+    longest = max(x.size // 50, 1)
+    w = int(min(max(min(noise / (0.01 * swing), math.sqrt(longest)) ** 2, 1.0), longest))
     width = 2 * (w // 2) + 1
     if width <= 1:
         return x.copy(), noise

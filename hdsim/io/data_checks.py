@@ -4,9 +4,10 @@ Every check is model-free: it reads the record and, where it needs a scale, the 
 datasheet numbers (rated torque, the softest and stiffest catalog stiffness K1, K3).
 Each returns a `Check`: a name, a status (``ok``, ``warn``, ``fail``) and one plain
 sentence a bench engineer would write in a log book. A ``fail`` of an *identity* check
-(the twist span of a locked test, the angle following the torque, a kinematic error
-that is identically zero, a ratio the angles contradict) means the record is not the
-test it claims; `wrong_test` gives that sentence (docs/measurements.md, "Checks").
+(the twist span of a locked test, the angle following the torque, a locked test's torque
+that never varies, a kinematic error that is identically zero, a ratio the angles
+contradict) means the record is not the test it claims; `wrong_test` gives that sentence
+(docs/measurements.md, "Checks").
 
 The signal analysis the checks rest on (noise without a model, torque legs, loading
 rates) is in `hdsim.signals`; a running-torque record goes to `hdsim.io.running_checks`.
@@ -178,11 +179,17 @@ def run_checks(meas, drive: DriveScale) -> tuple[list[Check], dict]:
     reversals = len(turns) - 2
     checks: list[Check] = []
 
-    if ke:
+    constant = not ke and np.ptp(T) == 0.0  # a driven test may hold one load; a locked test must vary it
+    if constant:
+        checks.append(Check("torque_varies", "fail", f"the torque is {float(T[0]):.6g} N·m on every row: a "
+                            "channel that was not logged, or another column (a temperature?) mapped as the torque"))
+    elif ke:
         checks += _kinematic_error_identity(meas, drive)
     else:
         checks += _locked_identity(meas, T, drive)
-    if swing <= 0 or torque_noise > NOISE_FAIL * swing:
+    if constant:
+        pass  # said above
+    elif swing <= 0 or torque_noise > NOISE_FAIL * swing:
         checks.append(Check("torque_noise", "fail", f"the torque noise ({torque_noise:.3g} N·m rms) is "
                             f"{torque_noise / max(swing, 1e-300):.2g} of its swing ({swing:.3g} N·m): the "
                             "record cannot show how the drive answers the torque"))
