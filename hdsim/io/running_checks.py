@@ -371,7 +371,7 @@ def running_checks(meas, drive) -> tuple[list, dict]:
                              "recorded: whether it reverses with the direction is not seen)"))
     else:
         checks.append(Check("torque_opposes_motion", "ok", "the torque changes sign with the direction"))
-    ratio = ratio_consistency(meas, "warn")  # with both angles logged, a wrong ratio scales an output torque
+    ratio = ratio_consistency(meas, "warn", drive)  # with both angles logged, a wrong ratio scales an output torque
     if ratio is not None and ratio.status != "ok":
         checks.append(Check(ratio.check, ratio.status, ratio.message + (
             ": the torque on the output is referred to the input by it" if meas.torque_side == "output" else "")))
