@@ -268,7 +268,13 @@ class TwistSession:
         self.unit_name = model.name
         slots = self._slots(model, [None], [[None], [None]], "baseline")
         self.passes += fit_many(self.evaluator, [p for slot in slots for p in slot])
-        fits = self._results(slots)
+        try:
+            fits = self._results(slots)
+        except (InputError, SolverError) as exc:  # the user's own model: a refusal, naming the record
+            source = self.measurement.source
+            raise type(exc)(str(exc) if str(exc).startswith(source) else
+                            f"{source}: the baseline ({', '.join(self.chosen) or 'the base model'}) cannot be "
+                            f"fitted to this record: {exc}") from None
         return Step(effects=self.kind.ordered(self.chosen), fit=fits[0], fold_fits=fits[1:])
 
     def entry_forms(self, family: str) -> tuple:
