@@ -45,12 +45,34 @@ def test_factor_sources():
 def test_options_refuse_nonsense():
     with pytest.raises(InputError, match="ratio"):
         ImportOptions(ratio=0.0)
-    with pytest.raises(InputError, match="rated torque"):
+    with pytest.raises(InputError, match="rated_torque"):
         ImportOptions(rated_torque=-3.0)
     with pytest.raises(InputError, match="window"):
         ImportOptions(window=(3.0, 1.0))
     keys = ImportOptions(test="stiffness", ratio=-50, rated_torque=16, meta={"torque_side": "output"}).overrides()
     assert keys == {"torque_side": "output", "test": "stiffness", "ratio": "-50.0", "rated_torque_Nm": "16.0"}
+
+
+def test_a_window_side_may_be_open_and_every_bad_keyword_is_named(tmp_path):
+    """window=(None, T1) is the API's '--window :T1'; a bad value is one InputError naming its
+    keyword, never a TypeError or ValueError from inside (or an unknown option it is not)."""
+    from hdsim.io.measurement import load_measurement
+
+    assert ImportOptions(window=(None, 5)).window == (-math.inf, 5.0)
+    assert ImportOptions(window=[2.5, None]).window == (2.5, math.inf)
+    t, torque, twist = _twist_rows()
+    path = _log(tmp_path, ["time_s", "torque_Nm", "angle_rad"], [[_num(a), _num(b), _num(c)]
+                                                                 for a, b, c in zip(t, torque, twist)])
+    meas = load_measurement(path, test="stiffness", window=(None, 0.3))
+    assert meas.time[-1] <= 0.3 and meas.rows.windowed_rows == int(np.sum(t > 0.3))
+    bad = {"window": [(1.0,), "1:5", (1.0, "5"), (5.0, 1.0)], "meta": [["torque_side=output"]],
+           "drop_nan": ["yes"], "ratio": [True], "test": [3]}
+    for keyword, values in bad.items():
+        for value in values:
+            with pytest.raises(InputError, match=f"^{keyword}: "):
+                load_measurement(path, **{"test": "stiffness", keyword: value})
+    with pytest.raises(InputError, match="unknown import option 'windw'; known: .*window"):
+        load_measurement(path, test="stiffness", windw=(0, 1))
 
 
 def _num(x) -> str:

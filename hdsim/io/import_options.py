@@ -21,14 +21,15 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass, field
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
 from hdsim.errors import InputError
 from hdsim.signals import glitches
 
-__all__ = ["ImportOptions", "RowReport", "parse_window", "parse_meta", "split_factor", "apply_rows", "glitch_rows"]
+__all__ = ["ImportOptions", "checked_options", "RowReport", "parse_window", "parse_meta", "split_factor", "apply_rows", "glitch_rows"]
 
 #: ``FACTOR*column`` in a column map: a number, a ``*``, then the file's column name
 _FACTOR = re.compile(r"^\s*([-+]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|inf(?:inity)?|nan))\s*\*\s*(\S.*?)\s*$",
@@ -53,7 +54,8 @@ class ImportOptions:
         Drop rows with a non-finite (or empty) cell in a used column, or a one-row glitch
         (`glitch_rows`), instead of refusing the file; the count is reported.
     window : tuple of float or None
-        ``(T0, T1)`` [s]: keep rows with ``T0 <= time_s <= T1``.
+        ``(T0, T1)`` [s]: keep rows with ``T0 <= time_s <= T1``; a side ``None`` is open
+        (as ``--window 5:`` is), kept as an infinity.
     sample_rate : float or None
         For a file without a time column: ``time_s = row index / sample_rate`` [Hz].
     concatenated : bool
@@ -73,17 +75,22 @@ class ImportOptions:
     def __post_init__(self):
         for name in ("ratio", "rated_torque", "sample_rate"):
             value = getattr(self, name)
-            if value is not None and not (isinstance(value, (int, float)) and math.isfinite(value)
-                                          and value != 0):
-                raise InputError(f"{name.replace('_', ' ')} must be a finite non-zero number, got {value!r}")
+            if value is not None and not (_is_number(value) and math.isfinite(value) and value != 0):
+                raise InputError(f"{name}: must be a finite non-zero number, got {value!r}")
         if self.rated_torque is not None and self.rated_torque < 0:
-            raise InputError(f"rated torque must be positive, got {self.rated_torque!r}")
+            raise InputError(f"rated_torque: must be positive, got {self.rated_torque!r}")
         if self.sample_rate is not None and self.sample_rate < 0:
-            raise InputError(f"sample rate must be positive, got {self.sample_rate!r}")
+            raise InputError(f"sample_rate: must be positive, got {self.sample_rate!r}")
+        if self.test is not None and not isinstance(self.test, str):
+            raise InputError(f"test: must be the name of a test (a str), e.g. 'stiffness', got {self.test!r}")
+        if not isinstance(self.meta, Mapping):
+            raise InputError(f"meta: must be a dict of '#' keys, e.g. {{'torque_side': 'output'}}, "
+                             f"got {type(self.meta).__name__} {self.meta!r}")
+        for name in ("drop_nan", "concatenated"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise InputError(f"{name}: must be True or False, got {getattr(self, name)!r}")
         if self.window is not None:
-            lo, hi = self.window
-            if not lo <= hi:  # also refuses NaN
-                raise InputError(f"window {lo:g}:{hi:g} is empty; expected T0 <= T1")
+            object.__setattr__(self, "window", _window(self.window))
 
     def overrides(self) -> dict[str, str]:
         """The ``#`` keys these options set, as text (they win over the file's)."""
@@ -95,6 +102,16 @@ class ImportOptions:
         if self.rated_torque is not None:
             keys["rated_torque_Nm"] = repr(float(self.rated_torque))
         return keys
+
+
+def checked_options(given: dict, where: str = "load_measurement") -> ImportOptions:
+    """`ImportOptions` of keyword arguments, an unknown name refused by name (``where`` says
+    whose keywords they are)."""
+    known = [f.name for f in fields(ImportOptions)]
+    unknown = [name for name in given if name not in known]
+    if unknown:
+        raise InputError(f"{where}: unknown import option {', '.join(map(repr, unknown))}; known: {', '.join(known)}")
+    return ImportOptions(**given)
 
 
 #: no import options: the file is read as it is
@@ -121,6 +138,24 @@ class RowReport:
     windowed_rows: int = 0
     runs: int = 1
     time_from_rows: bool = False
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
+
+
+def _window(value) -> tuple[float, float]:
+    """The ``window`` keyword as ``(T0, T1)`` [s]: a pair of numbers, ``None`` for an open side."""
+    usage = "window: expected (T0, T1) in seconds, None for an open side, e.g. (2.5, 40) or (5, None)"
+    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != 2:
+        raise InputError(f"{usage}; got {value!r}")
+    if not all(side is None or _is_number(side) for side in value):
+        raise InputError(f"{usage}; got {value!r}")
+    lo = -math.inf if value[0] is None else float(value[0])
+    hi = math.inf if value[1] is None else float(value[1])
+    if not lo <= hi:  # also refuses NaN
+        raise InputError(f"window: ({lo:g}, {hi:g}) is empty; expected T0 <= T1")
+    return lo, hi
 
 
 def parse_window(text: str) -> tuple[float, float]:

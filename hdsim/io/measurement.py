@@ -49,7 +49,7 @@ import numpy as np
 
 from hdsim.errors import InputError
 from hdsim.atomic import atomic_path, hdf5_atomic
-from hdsim.io.import_options import ImportOptions, RowReport
+from hdsim.io.import_options import RowReport, checked_options
 from hdsim.io.measurement_checks import (
     RATED_KEYS,
     ONE_OF,
@@ -207,7 +207,9 @@ def load_measurement(path: str | os.PathLike, columns: dict[str, str] | None = N
     **import_options
         What the log does not say itself (`hdsim.io.import_options.ImportOptions`):
         ``test``, ``ratio``, ``rated_torque``, ``meta`` (other ``#`` keys), ``drop_nan``,
-        ``window`` (T0, T1) [s], ``sample_rate`` [Hz] (no time column), ``concatenated``.
+        ``window`` (T0, T1) [s] (``None`` for an open side), ``sample_rate`` [Hz] (no time
+        column), ``concatenated``. An unknown name or a bad value is an `InputError`
+        naming the keyword.
 
     Returns
     -------
@@ -223,11 +225,7 @@ def load_measurement(path: str | os.PathLike, columns: dict[str, str] | None = N
         column, a non-numeric, NaN or infinite cell, fewer than 10 rows, time not
         strictly increasing, an unreadable HDF5 file.
     """
-    try:
-        options = ImportOptions(**import_options)
-    except TypeError:
-        raise InputError(f"load_measurement: unknown import option among {', '.join(import_options)}; "
-                         f"known: {', '.join(ImportOptions.__dataclass_fields__)}") from None
+    options = checked_options(import_options)
     parsed = read_measurement_file(path, columns, options)
     return _build(parsed.data, parsed.test, parsed.ratio, parsed.rated_torque, parsed.meta,
                   str(path), parsed.rows)
