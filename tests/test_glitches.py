@@ -54,7 +54,7 @@ def test_a_glitch_next_to_a_nan_is_not_judged():
 def test_a_log_with_a_glitch_is_refused_naming_its_line(tmp_path):
     path = _with_torque_cell(tmp_path, 5, "1e3")
     with pytest.raises(InputError, match=r"line 9, column 'torque_Nm': 1000\.0 jumps away from both neighbours"
-                                         r".*--drop-nan drops them"):
+                                         r".*drop_nan=True drops them"):
         load_measurement(path)
 
 

@@ -122,14 +122,14 @@ def test_concatenated_runs_and_logs_without_a_clock(tmp_path):
     t, torque, twist = _twist_rows(n=30, restart_every=10)  # three runs of 10 rows, clock 0 … 0.09 s each
     rows = [[_num(a), _num(b), _num(c)] for a, b, c in zip(t, torque, twist)]
     path = _log(tmp_path, ["time_s", "torque_Nm", "angle_rad"], rows)
-    with pytest.raises(InputError, match="--concatenated joins them"):
+    with pytest.raises(InputError, match="concatenated=True joins them"):
         load_measurement(path, test="stiffness")
     meas = load_measurement(path, test="stiffness", concatenated=True)
     np.testing.assert_allclose(meas.time, np.arange(30) * 0.01, atol=1e-12)  # each run one step after the last
     assert meas.rows.runs == 3
     steps = _log(tmp_path, ["torque_Nm", "angle_deg"], [[_num(b), _num(np.degrees(c))] for b, c in
                                                          zip(torque, twist)], "steps.csv")
-    with pytest.raises(InputError, match="--sample-rate"):
+    with pytest.raises(InputError, match="sample_rate=HZ"):
         load_measurement(steps, test="stiffness")
     meas = load_measurement(steps, test="stiffness", sample_rate=2.0)
     np.testing.assert_allclose(meas.time, np.arange(30) / 2.0)
@@ -180,3 +180,22 @@ def test_import_option_strings_end_in_a_value_or_one_clear_line(window, meta, so
         ImportOptions(ratio=numbers[0], rated_torque=numbers[1], sample_rate=numbers[2])
     except InputError as exc:
         assert str(exc)
+
+
+def test_the_library_names_keywords_and_the_cli_its_flags():
+    """A Python caller is told the keyword (drop_nan=True), arrays are mended by the caller, and
+    the command line says the flag (--drop-nan) of the same message."""
+    from hdsim.cli._import_arguments import cli_words
+    from hdsim.io.measurement import make_measurement
+
+    t = np.arange(20.0)
+    torque = np.sin(t)
+    torque[3] = np.nan
+    with pytest.raises(InputError, match=r"\(1 such rows; drop those rows from the arrays\)$") as arrays:
+        make_measurement("stiffness", t, torque, 1e-4 * torque)
+    assert "--" not in str(arrays.value) and "drop_nan" not in str(arrays.value)
+    assert cli_words("run.csv: x (1 such rows; a log's failed reads are dropped with drop_nan=True)") == \
+        "run.csv: x (1 such rows; a log's failed reads are dropped with --drop-nan)"
+    assert cli_words("no time column; give its name with columns={'time_s': NAME}, or ... sample_rate=HZ") == \
+        "no time column; give its name with --columns time_s=NAME, or ... --sample-rate HZ"
+    assert cli_words("rated_torque: must be positive") == "--rated-torque: must be positive"

@@ -5,6 +5,8 @@ docs/measurements.md, "Bringing your own bench log", shows them on real-looking 
 
 from __future__ import annotations
 
+import re
+
 IMPORT_EPILOG = """\
 reading a log from other bench software (nothing needs editing):
   --test stiffness --ratio 100 --rated-torque 67   the '#' keys the log lacks
@@ -44,6 +46,28 @@ def add_import_arguments(parser) -> None:
                        help="the log holds several runs whose clock restarts: join them end to end")
     group.add_argument("--sample-rate", default=None, type=float, metavar="HZ",
                        help="a log without a time column: time_s = row index / HZ")
+
+
+#: the library names an import option by its keyword (``drop_nan=True``, ``sample_rate=HZ``,
+#: ``columns={'time_s': NAME}``, ``ratio: …`` at the start); the command line says the flag
+_KEYWORDS = "test|ratio|rated_torque|meta|drop_nan|window|sample_rate|concatenated"
+_CLI_WORDS = (
+    (re.compile(r"(?<![\w/.-])(drop_nan|concatenated)=True\b"), lambda m: _flag(m[1])),
+    (re.compile(r"(?<![\w/.-])columns=\{'(\w+)': (\w+)\}"), lambda m: f"--columns {m[1]}={m[2]}"),
+    (re.compile(r"(?<![\w/.-])(test|ratio|rated_torque|sample_rate)=(\w+)"), lambda m: f"{_flag(m[1])} {m[2]}"),
+    (re.compile(rf"^({_KEYWORDS}): "), lambda m: f"{_flag(m[1])}: "),
+)
+
+
+def _flag(keyword: str) -> str:
+    return "--" + keyword.replace("_", "-")
+
+
+def cli_words(message: str) -> str:
+    """A library message about the import options in the command line's words (the flags)."""
+    for pattern, flag in _CLI_WORDS:
+        message = pattern.sub(flag, message)
+    return message
 
 
 def import_options(args):

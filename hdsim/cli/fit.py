@@ -45,7 +45,7 @@ def register(subparsers) -> None:
 
 def load_inputs(args):
     """(measurement, effects) with every input checked before anything runs."""
-    from hdsim.cli._import_arguments import import_options
+    from hdsim.cli._import_arguments import cli_words, import_options
     from hdsim.errors import InputError
     from hdsim.identification import workflow  # noqa: F401  (registers the built-in test kinds)
     from hdsim.identification.test_kinds import test_kind, test_kinds
@@ -65,9 +65,12 @@ def load_inputs(args):
             errors.append(error)
     else:
         raise errors[-1]
-    options = import_options(args)
-    load_unit(args.unit)  # unknown unit: one line, exit 2, before reading anything big
-    meas = load_measurement(args.data, columns, **vars(options))
+    try:  # the library names its keywords (drop_nan=True); the command line says its flags
+        options = import_options(args)
+        load_unit(args.unit)  # unknown unit: one line, exit 2, before reading anything big
+        meas = load_measurement(args.data, columns, **vars(options))
+    except InputError as error:
+        raise InputError(cli_words(str(error))) from None
     return meas, test_kind(meas.test).parse_effects(args.effects)
 
 

@@ -227,12 +227,12 @@ def apply_rows(data: dict, options: ImportOptions, where) -> tuple[dict, RowRepo
     time_from_rows = False
     if "time_s" not in data:
         if options.sample_rate is None:
-            raise where.fail("no time column; give its name with --columns time_s=NAME, or the "
-                             "sample rate of a log without one with --sample-rate HZ")
+            raise where.fail("no time column; give its name with columns={'time_s': NAME}, or the "
+                             "sample rate of a log without one with sample_rate=HZ")
         data = {**data, "time_s": np.arange(n, dtype=float) / options.sample_rate}
         time_from_rows = True
     elif options.sample_rate is not None:
-        raise where.fail("the file has a time column; --sample-rate is for logs without one")
+        raise where.fail("the file has a time column; sample_rate=HZ is for logs without one")
     runs = 1
     if options.concatenated:
         joined, runs = _joined_clock(data["time_s"])

@@ -310,7 +310,7 @@ def make_measurement(
     sizes = {name: v.size for name, v in data.items()}
     if len(set(sizes.values())) > 1:
         raise where.fail(f"columns differ in length ({sizes}); expected equal lengths")
-    check_values(data, where, {si: f"column '{si}'" for si in data})
+    check_values(data, where, {si: f"column '{si}'" for si in data}, from_file=False)
     data = complete_angles(data, test, ratio, where)
     return _build(data, test, ratio, rated, text_meta, source)
 

@@ -301,7 +301,7 @@ def interpret_meta(
     tests = ", ".join(list(TESTS)[:-1]) + " or " + list(TESTS)[-1]
     if "test" not in meta:
         raise where.fail(f"no '# test:' key; expected '# test: T' with T {tests} (HDF5: a 'test' attribute; "
-                         "a log without keys: --test)")
+                         "a log without keys: test=TEST)")
     test = meta["test"].strip()
     if test not in TESTS:
         close = difflib.get_close_matches(test, list(TESTS), n=1, cutoff=0.5)
@@ -317,7 +317,7 @@ def interpret_meta(
         ratio = _parse_number(where, "ratio", meta["ratio"], origin.get("ratio", ""),
                               nonzero=True)
     elif (why := _why_ratio(test, side)):
-        raise where.fail(f"no '# ratio:' key; a {test} file {why}, e.g. '# ratio: 100' (or --ratio 100)")
+        raise where.fail(f"no '# ratio:' key; a {test} file {why}, e.g. '# ratio: 100' (or ratio=100)")
     rated = None
     for key in RATED_KEYS:
         if key in meta:
@@ -417,7 +417,7 @@ def resolve_columns(
             split = split_unit(si)
             alt = f" (or {split[0]}_deg/_arcmin/_arcsec/_rev)" if split else ""
             if si == "time_s":
-                alt = " (a log without a clock: give its sample rate with --sample-rate HZ)"
+                alt = " (a log without a clock: give its sample rate with sample_rate=HZ)"
             raise where.fail(f"missing {what} '{si}'{alt}; a {test} file needs "
                              f"{', '.join(needed)}")
     either = ONE_OF.get(test, ())
@@ -460,7 +460,7 @@ def complete_angles(data: dict[str, np.ndarray], test: str, ratio: float | None,
     if ratio is None:
         have = "wg_angle_rad" if wg is not None else "output_angle_rad"
         raise where.fail(f"only {have} is given and no '# ratio:' key; a {test} file with one angle needs "
-                         "the transmission ratio to give the other (e.g. --ratio 100)")
+                         "the transmission ratio to give the other (e.g. ratio=100)")
     data = dict(data)
     if wg is None:
         data["wg_angle_rad"] = out * ratio
@@ -483,7 +483,7 @@ def _unknown_column_text(name: str, spelled: str, test: str, what: str, mapped: 
             f"(angles may end in _deg, _arcmin, _arcsec, _rev){extra}")
 
 
-def check_values(data: dict[str, np.ndarray], where: Where, names: dict[str, str]) -> None:
+def check_values(data: dict[str, np.ndarray], where: Where, names: dict[str, str], from_file: bool = True) -> None:
     """Refuse anything but finite numbers, enough rows and strictly increasing time.
 
     Parameters
@@ -495,6 +495,10 @@ def check_values(data: dict[str, np.ndarray], where: Where, names: dict[str, str
     names : dict of str to str
         Canonical SI name -> how the message names the column (``"column 'pos'"``), so
         that a message names what the user sees.
+    from_file : bool
+        The columns were read from a file (`load_measurement`): the messages name its import
+        options (``drop_nan=True``, ``concatenated=True``); else they are arrays
+        (`make_measurement`), which the caller mends.
 
     Raises
     ------
@@ -503,24 +507,27 @@ def check_values(data: dict[str, np.ndarray], where: Where, names: dict[str, str
         `MIN_ROWS` rows, or a time that does not increase strictly.
     """
     n = data["time_s"].size
+    drop, glitch, join = (("a log's failed reads are dropped with drop_nan=True",
+                           "drop_nan=True drops them with the NaN rows", "concatenated=True joins them")
+                          if from_file else ("drop those rows from the arrays", "drop them from the arrays",
+                                             "join their clocks into one"))
     for si, values in data.items():
         bad = np.flatnonzero(~np.isfinite(values))
         if bad.size:
             i = int(bad[0])
             raise where.fail(f"{where.row(i)}, {names[si]}: {float(values[i])!r} is not "
-                             f"finite; expected a finite number ({bad.size} such rows; a log's failed "
-                             "reads are dropped with --drop-nan)")
+                             f"finite; expected a finite number ({bad.size} such rows; {drop})")
     if n < MIN_ROWS:
         raise where.fail(f"{n} data rows; expected at least {MIN_ROWS}")
     for si, rows in glitch_rows(data).items():
         i, values = int(rows[0]), data[si]
         raise where.fail(f"{where.row(i)}, {names[si]}: {float(values[i])!r} jumps away from both neighbours "
                          f"({float(values[i - 1]):.6g}, {float(values[i + 1]):.6g}) and back: a glitch, a failed "
-                         f"read? ({rows.size} such rows; --drop-nan drops them with the NaN rows)")
+                         f"read? ({rows.size} such rows; {glitch})")
     t = data["time_s"]
     bad = np.flatnonzero(~(np.diff(t) > 0))
     if bad.size:
         i = int(bad[0]) + 1
         raise where.fail(f"{where.row(i)}, {names['time_s']}: {float(t[i])!r} after "
                          f"{float(t[i - 1])!r}; expected time to increase strictly (several runs whose clock "
-                         "restarts? --concatenated joins them)")
+                         f"restarts? {join})")
