@@ -47,6 +47,11 @@ def test_the_stiffness_under_load_is_identified_in_either_sign_convention(profil
     assert result.added == ["kinematic_error"] and result.outcome == "found"
     stiffness = result.final.fit.summary()["derived"]["K0_Nm_per_rad"]
     assert stiffness == pytest.approx(tr["params"]["k1"], rel=0.05)
+    # the diagnosis JSON carries the value beside its uncertainty, as `hdsim fit --json` does
+    final = result.to_json()["final"]
+    assert final["derived"]["K0_Nm_per_rad"] == stiffness
+    assert "stiffness.K0" in final["fitted"] and "stiffness.K0" in final["uncertainty"]
+    assert set(final["uncertainty"]) <= {*final["fitted"], *final["derived"], *final["params"], "offset_rad"}
     checks = {c["check"]: c for c in result.checks}
     assert checks["torque_sign"]["status"] == ("ok" if sign > 0 else "warn")
     # the rms falls to the measurement noise of the truth (0.55 arcsec rms, plus the encoder's steps)

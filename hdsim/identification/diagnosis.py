@@ -188,7 +188,10 @@ class TwistTest(TestKind):
 
     def fit_json(self, fit_result) -> dict:
         summary = fit_result.summary()
-        return {key: summary[key] for key in ("effect_ids", "params", "uncertainty", "offset_rad")}
+        # fitted and derived too: the uncertainty is keyed by what was fitted (the stiffness K0
+        # under a kinematic-error run's load), so each value stands beside its uncertainty
+        return {key: summary[key] for key in ("effect_ids", "params", "fitted", "uncertainty", "derived",
+                                              "offset_rad")}
 
     def step_figures(self, step) -> dict:
         return {"holdout_rmse_rad": [float(f.rmse(~f.rows)) for f in step.fold_fits]}
