@@ -138,6 +138,8 @@ class BreakawayFit(TorqueFit):
     fitted: dict = field(default_factory=dict)
     uncertainty: dict = field(default_factory=dict)
     n_params: int = 0
+    #: the drive the fit was made for (`hdsim.fit`'s ``unit``; None: the default unit)
+    unit: object = None
 
     def metrics(self) -> dict:
         # starting_torque_forward_Nm, …_forward_uncertainty_Nm, …_reverse_Nm, …_reverse_uncertainty_Nm
@@ -145,13 +147,13 @@ class BreakawayFit(TorqueFit):
 
     @property
     def drive(self):
-        """The default unit (with the record's ratio) whose input friction breaks away at the
+        """The fit's unit (with the record's ratio) whose input friction breaks away at the
         fitted static level (the mean of the directions) and, with the friction family, drops
         to the fitted level at speed (its Stribeck speed kept: the drive's law decays as a
         Gaussian, this fit's as an exponential, so the speed is the scale, not the same curve)."""
         from hdsim.identification.fit import _unit_model  # the same start as every fit's drive
 
-        base = _unit_model(None, self.measurement)
+        base = _unit_model(self.unit, self.measurement)
         side, f = abs(self.record.side_factor), self.fitted
         start = (f["level"] + 0.5 * f.get("asymmetry.reverse_excess", 0.0)) / side
         running = start - f.get("friction.stribeck_drop", 0.0) / side
@@ -205,9 +207,10 @@ def _columns(rec: BreakawayRecord, families, stribeck_speed: float):
     return names, np.column_stack(cols), np.array(lower)
 
 
-def fit_breakaway(record, families=(), rows=None) -> BreakawayFit:
+def fit_breakaway(record, families=(), rows=None, unit=None) -> BreakawayFit:
     """Fit the breakaway law with ``families`` (any of ``asymmetry``, ``friction``) on the
-    moving rows of ``record`` (within ``rows`` when given).
+    moving rows of ``record`` (within ``rows`` when given); ``unit`` is the drive the fit's
+    ``.drive`` starts from (default: the catalog default).
 
     Raises
     ------
@@ -242,7 +245,8 @@ def fit_breakaway(record, families=(), rows=None) -> BreakawayFit:
     uncertainty = {k: float(math.sqrt(max(cov[i, i], 0.0))) * units.get(k, 1.0) for i, k in enumerate(names)}
     if "friction" in families:
         fitted["friction.stribeck_speed"] = float(ws)
-    return BreakawayFit(residual, use, rec, families, fitted, uncertainty, len(names) + ("friction" in families))
+    return BreakawayFit(residual, use, rec, families, fitted, uncertainty, len(names) + ("friction" in families),
+                        unit)
 
 
 def breakaway_checks(meas, scale) -> tuple[list, dict]:
@@ -296,7 +300,7 @@ class BreakawayTest(RunningTorqueTest):
         return {f: FAMILY_IDS[f] for f in names if f}
 
     def fit(self, meas, effects=None, *, unit=None):
-        return fit_breakaway(meas, list(self.parse_effects(effects)))
+        return fit_breakaway(meas, list(self.parse_effects(effects)), unit=unit)
 
     def fit_summary(self, result, stem, scale) -> dict:
         summary = result.summary()
@@ -305,7 +309,7 @@ class BreakawayTest(RunningTorqueTest):
         return summary
 
     def session(self, meas, chosen, *, unit=None, candidates=None, max_steps=None):
-        return BreakawaySession(meas, chosen)
+        return BreakawaySession(meas, chosen, unit)
 
     def fit_json(self, fit) -> dict:
         return {"fitted": fit.fitted, "uncertainty": fit.uncertainty}
@@ -382,7 +386,7 @@ class BreakawaySession(RunningSession):
 
     def fit_model(self, ids, rows=None, widened=()):
         by_id = {v: k for k, v in FAMILY_IDS.items()}
-        return fit_breakaway(self.record, [by_id.get(i, i) for i in ids], rows=rows)
+        return fit_breakaway(self.record, [by_id.get(i, i) for i in ids], rows=rows, unit=self.unit)
 
     def entry_forms(self, family: str) -> tuple:
         return (FAMILY_IDS[family],)

@@ -87,7 +87,7 @@ class RunningTorqueTest(TestKind):
         return parse_running_forms(effects)
 
     def fit(self, meas, effects=None, *, unit=None):
-        return fit_running(meas, list(parse_running_forms(effects).values()))
+        return fit_running(meas, list(parse_running_forms(effects).values()), unit=unit)
 
     def fit_summary(self, result, stem, scale) -> dict:
         from hdsim.identification.running_report import fit_figures
@@ -97,7 +97,7 @@ class RunningTorqueTest(TestKind):
         return summary
 
     def session(self, meas, chosen, *, unit=None, candidates=None, max_steps=None):
-        return RunningSession(meas, chosen)
+        return RunningSession(meas, chosen, unit)
 
     def diagnose(self, meas, effects=None, *, unit=None, families=None, candidates=None, max_rounds=None,
                  max_steps=None, log=None):
@@ -196,8 +196,9 @@ class RunningSession:
     #: the families in the model may take other shapes of their own (the proxy test)
     widens = True
 
-    def __init__(self, meas, chosen: dict):
+    def __init__(self, meas, chosen: dict, unit=None):
         self.record = self.record_of(meas)
+        self.unit = unit  # the drive each fit's ``.drive`` starts from
         self.measurement = self.record.measurement
         self.chosen = dict(chosen)
         self.folds = self.folds_of(self.record)
@@ -223,7 +224,7 @@ class RunningSession:
         """The law with ``families`` fitted on ``rows`` (default every moving row). A hold-out
         fold's fit keeps the Stribeck grid's best point: it is judged only by its prediction of
         the other half, and the refinement would cost it half again."""
-        return fit_running(self.record, families, rows=rows, widened=widened, refine=rows is None)
+        return fit_running(self.record, families, rows=rows, widened=widened, refine=rows is None, unit=self.unit)
 
     def entry_forms(self, family: str) -> tuple:
         """The ids of the forms of ``family`` a candidate enters in (the best passing one stands

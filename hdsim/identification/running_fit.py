@@ -219,6 +219,8 @@ class RunningFit(TorqueFit):
     forms: dict = field(default_factory=dict)
     #: the amplitudes and their covariance (None without one)
     coordinates: SweepCoordinates | None = None
+    #: the drive the fit was made for (`hdsim.fit`'s ``unit``; None: the default unit)
+    unit: object = None
 
     def metrics(self) -> dict:
         """``running_torque_forward_Nm`` / ``_reverse_Nm`` on the file's side: one definition
@@ -341,12 +343,12 @@ class RunningFit(TorqueFit):
 
     @property
     def drive(self):
-        """The drive the sweep was fitted for, running the fitted law (`drive_for` of the default unit).
+        """The drive the sweep was fitted for (``unit``), running the fitted law (`drive_for`).
 
         ``hdsim.run_scenario(fit.drive, "running_torque")`` runs the measured friction and
         ``hdsim.sobol(fit.drive, {"input_friction.coulomb_torque": (lo, hi)}, …)`` studies it.
         """
-        return self.drive_for(None)
+        return self.drive_for(self.unit)
 
     def drive_for(self, unit=None):
         """A drive whose input friction is the fitted law.
@@ -432,7 +434,7 @@ def bounded_lsq(A, y, lower, upper) -> np.ndarray:
     return sol.x / scale
 
 
-def fit_running(record, families=(), rows=None, widened=(), refine: bool = True) -> RunningFit:
+def fit_running(record, families=(), rows=None, widened=(), refine: bool = True, unit=None) -> RunningFit:
     """Fit the running-torque law with the base and ``families`` to a sweep.
 
     Parameters
@@ -450,6 +452,8 @@ def fit_running(record, families=(), rows=None, widened=(), refine: bool = True)
     refine : bool
         Refine the Stribeck speed between the grid's points (`hdsim.identification.sweep_nonlinear`);
         False keeps the best grid point, for a fit judged only by what it predicts (a hold-out fold).
+    unit : str, os.PathLike or HarmonicDrive, optional
+        The drive the fit is for, which its ``.drive`` starts from (default: the catalog default).
 
     Returns
     -------
@@ -501,7 +505,7 @@ def fit_running(record, families=(), rows=None, widened=(), refine: bool = True)
     # ω's own: σ(ln ω)·ω
     uncertainty.update({f"{f}.stribeck_speed": float(v * s) for (f, v), s in zip(nonlinear.items(), sd[len(keys):])})
     fit = RunningFit(rec, families, law, inertia, prediction, residual, use, n_params, fitted, uncertainty,
-                     {t.family: t.id for t in terms[1:]}, coordinates)
+                     {t.family: t.id for t in terms[1:]}, coordinates, unit)
     for key in fit.held_at_zero:  # left out of the design: 0 in the law, not determined
         fitted[key], uncertainty[key] = 0.0, math.inf
     return fit
