@@ -55,3 +55,28 @@ def test_the_drive_of_a_torque_fit_is_the_unit_given(record):
     assert drive.input_friction.load_coefficient == unit.input_friction.load_coefficient
     assert hdsim.fit(record(), unit=unit).drive.name == "CSG-14-100"  # a drive object as well as a name
     assert hdsim.fit(record()).drive.name == hdsim.load_unit().name  # and the default without one
+
+
+def test_a_breakaway_drive_carries_the_fitted_viscous_asymmetry_and_inertia():
+    meas, _ = _breakaway()
+    result = hdsim.fit(meas, "friction,asymmetry")
+    f, drive, unit = result.fitted, result.drive, hdsim.load_unit()
+    law = drive.input_friction
+    assert law.viscous == f["viscous"] != unit.input_friction.viscous
+    # the law starts forward at the fitted level, reverse at the level plus the fitted excess
+    forward, reverse = law.starting_torque + law.coulomb_asymmetry, law.starting_torque - law.coulomb_asymmetry
+    assert (forward, reverse) == pytest.approx((f["level"], f["level"] + f["asymmetry.reverse_excess"]), rel=1e-12)
+    assert law.coulomb_asymmetry != 0.0
+    assert forward - (law.coulomb_torque + law.coulomb_asymmetry) == pytest.approx(f["friction.stribeck_drop"])
+    # the drive's rigid inertia on the WG shaft (J_in + J_out/N²) is the fitted one
+    rigid = drive.drive.J_in + drive.drive.J_out / drive.drive.ratio ** 2
+    assert rigid == pytest.approx(f["inertia"], rel=1e-12) and drive.drive.J_in != unit.drive.J_in
+
+
+def test_a_fitted_inertia_is_carried_only_where_it_is_the_inputs():
+    sweep = hdsim.fit(_sweep(), "friction")
+    rigid = sweep.drive.drive.J_in + sweep.drive.drive.J_out / sweep.drive.drive.ratio ** 2
+    assert rigid == pytest.approx(sweep.inertia, rel=1e-12) and sweep.inertia == pytest.approx(3e-5, rel=0.05)
+    # torque on the output shaft: the motor turned the output, so the inertia is not the input's
+    meas, _ = _breakaway(torque_side="output")
+    assert hdsim.fit(meas).drive.drive.J_in == hdsim.load_unit().drive.J_in

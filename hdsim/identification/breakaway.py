@@ -147,20 +147,33 @@ class BreakawayFit(TorqueFit):
 
     @property
     def drive(self):
-        """The fit's unit (with the record's ratio) whose input friction breaks away at the
-        fitted static level (the mean of the directions) and, with the friction family, drops
-        to the fitted level at speed (its Stribeck speed kept: the drive's law decays as a
-        Gaussian, this fit's as an exponential, so the speed is the scale, not the same curve)."""
-        from hdsim.identification.fit import _unit_model  # the same start as every fit's drive
+        """The fit's unit (with the record's ratio) carrying what the fit determined.
+
+        Its input friction (on the WG shaft) breaks away at the fitted static level, the mean
+        of the directions, with the asymmetry as its ``coulomb_asymmetry`` (forward level
+        ``F + Δ``, reverse ``F − Δ``: Δ is minus half the fitted reverse excess); with the
+        friction family it drops by the fitted drop to its running level at speed; its
+        ``viscous`` is the fitted one. The fitted inertia becomes ``drive.J_in`` where the
+        record determines it (`hdsim.identification.fit.with_fitted_inertia`).
+
+        Not carried: the shape of the drop (the drive's law decays as a Gaussian of
+        ``ω/ω_s``, this fit's as an exponential, so the fitted Stribeck speed is the scale,
+        not the same curve). What a breakaway cannot show keeps the unit's: the ripple,
+        the position torque, the mesh-loss coefficient and the smoothing speed ``ω_ε``, and
+        the Stribeck speed without the friction family.
+        """
+        from hdsim.identification.fit import _unit_model, with_fitted_inertia  # every fit's drive starts so
 
         base = _unit_model(self.unit, self.measurement)
         side, f = abs(self.record.side_factor), self.fitted
-        start = (f["level"] + 0.5 * f.get("asymmetry.reverse_excess", 0.0)) / side
-        running = start - f.get("friction.stribeck_drop", 0.0) / side
-        law = base.input_friction.with_updates(starting_torque=start, coulomb_torque=running,
-                                               stribeck_speed=f.get("friction.stribeck_speed",
-                                                                    base.input_friction.stribeck_speed))
-        return base.with_input_friction(law)
+        excess = f.get("asymmetry.reverse_excess", 0.0) / side
+        start = f["level"] / side + 0.5 * excess
+        law = base.input_friction.with_updates(
+            starting_torque=start, coulomb_torque=start - f.get("friction.stribeck_drop", 0.0) / side,
+            coulomb_asymmetry=-0.5 * excess, viscous=f["viscous"],
+            stribeck_speed=f.get("friction.stribeck_speed", base.input_friction.stribeck_speed))
+        drive = with_fitted_inertia(base, f["inertia"], self.uncertainty.get("inertia", math.inf), self.measurement)
+        return drive.with_input_friction(law)
 
     def to_toml(self) -> str:
         import tomli_w

@@ -95,6 +95,19 @@ def _unit_model(unit: str | HarmonicDrive | None, meas: Measurement | None) -> H
     return model.with_updates(updates) if updates else model
 
 
+def with_fitted_inertia(drive, inertia: float, sigma: float, meas: Measurement):
+    """``drive`` with ``drive.J_in`` (motor + WG) the fitted inertia on the WG shaft (1-σ
+    ``sigma``) less the output's ``J_out/N²``, which turned with it: the drive's rigid inertia
+    is then the fitted one. Unchanged where the record does not determine the input's: a
+    torque on the output shaft (the motor turned the output), an inertia under twice its
+    uncertainty or under the output's share."""
+    ratio = float(np.asarray(drive.drive.ratio).reshape(-1)[0])
+    own = inertia - float(np.asarray(drive.drive.J_out).reshape(-1)[0]) / ratio ** 2
+    if meas.torque_side == "output" or not (inertia > 2.0 * sigma and own > 0.0):
+        return drive
+    return drive.with_updates({"drive.J_in": own})
+
+
 def build_model(unit, effects: dict[str, str], meas: Measurement | None = None) -> HarmonicDrive:
     """The unit with exactly ``effects`` switched on, others "none".
 

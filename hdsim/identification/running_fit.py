@@ -351,11 +351,12 @@ class RunningFit(TorqueFit):
         return self.drive_for(self.unit)
 
     def drive_for(self, unit=None):
-        """A drive whose input friction is the fitted law.
+        """A drive whose input friction is the fitted law, and its inertia the fitted one.
 
         The drive is the one `hdsim.fit` starts a locked fit from: ``unit`` (a built-in name,
         a drive file or a `HarmonicDrive`; None: the default unit) with the record's ratio
-        and rated torque where it gives them. Its ``input_friction`` becomes the fitted law.
+        and rated torque where it gives them. Its ``input_friction`` becomes the fitted law, its
+        ``drive.J_in`` the fitted inertia where the record determines it (`fit.with_fitted_inertia`).
 
         Torque side: the drive's input friction acts on the wave-generator (input) shaft, and
         so does the law: a record with ``torque_side: output`` was referred to the input when
@@ -376,12 +377,13 @@ class RunningFit(TorqueFit):
         HarmonicDrive
             That drive with ``input_friction`` = the fitted law [N·m on the WG shaft].
         """
-        from hdsim.identification.fit import _unit_model  # same start as a locked fit's model
+        from hdsim.identification.fit import _unit_model, with_fitted_inertia  # same start as a locked fit's model
 
         base = _unit_model(unit, self.measurement)
         own = base.input_friction
         law = self.law.with_updates(load_coefficient=own.load_coefficient, velocity_scale=own.velocity_scale)
-        return base.with_input_friction(law)
+        sigma = self.uncertainty.get(f"{BASE_TERM.family}.inertia", math.inf)
+        return with_fitted_inertia(base, self.inertia, sigma, self.measurement).with_input_friction(law)
 
 
 def _design(rec: SweepRecord, terms: list[RunningTerm], nonlinear: dict, widened: tuple = (), keep=True) -> tuple:
