@@ -43,13 +43,17 @@ __all__ = ["FitResult", "fit", "parse_effects", "build_model", "load_fitted", "r
 
 
 def parse_effects(text) -> dict[str, str]:
-    """``'friction,hardening'``, ``'dahl,tanh'`` or ``'friction=dahl'`` -> {family: effect id}.
+    """``'friction,hardening'``, ``'dahl,tanh'``, ``'friction=dahl'`` or ``{'friction': 'dahl'}``
+    -> {family: effect id}.
 
-    Family names take the family's default effect (`hdsim.model.effects.default_effect`); an effect id names its family; ``none`` and
-    empty entries are ignored. Unknown names raise `InputError` with close matches.
+    Family names take the family's default effect (`hdsim.model.effects.default_effect`); an
+    effect id names its family; ``none`` and empty entries are ignored. Unknown names raise
+    `InputError` with close matches.
     """
     if text is None:
         return {}
+    if isinstance(text, dict):  # {family: effect id}, checked as 'family=id' is
+        text = [family if effect_id is None else f"{family}={effect_id}" for family, effect_id in text.items()]
     items = text if isinstance(text, (list, tuple, set)) else str(text).split(",")
     by_id = {}
     for family, classes in fx.FAMILIES.items():
@@ -416,8 +420,8 @@ def fit(meas: Measurement, effects=None, *, unit=None, rows=None, start: dict | 
     meas : Measurement
         From `hdsim.io.measurement.load_measurement`.
     effects : str, list or dict, optional
-        Families or effect ids (see `parse_effects`); none means the base model
-        (linear compliance and the angle offset).
+        Families or effect ids, or {family: effect id} (see `parse_effects`); none means the
+        base model (linear compliance and the angle offset).
     unit : str or HarmonicDrive, optional
         Built-in unit name (default: the catalog default) or a model to start from.
     rows : array_like of bool, optional
@@ -433,8 +437,7 @@ def fit(meas: Measurement, effects=None, *, unit=None, rows=None, start: dict | 
     FitResult
         A twist test's fit (`hdsim.fit` fits a record of any test kind).
     """
-    chosen = effects if isinstance(effects, dict) else parse_effects(effects)
-    model = build_model(unit, chosen, meas)
+    model = build_model(unit, parse_effects(effects), meas)
     ev = Evaluator(meas, max_steps=max_steps)
     # the effects' other start values run in the same lockstep (about free); the lowest cost wins
     starts = [start] + [{**(start or {}), **alt} for alt in other_starts(model, meas)]

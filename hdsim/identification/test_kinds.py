@@ -101,6 +101,16 @@ class TestKind:
         """The baseline's families from the user's text, list or dict."""
         raise NotImplementedError
 
+    def baseline_effects(self, effects) -> dict:
+        """`parse_effects` with every family checked: a name no test kind knows is refused
+        with the close matches, whatever form ``effects`` takes (text, list or dict)."""
+        chosen = self.parse_effects(effects)
+        known = self.families()
+        for family in chosen:
+            if family not in known:
+                raise unknown_name("effect family", family, {f for kind in _KINDS.values() for f in kind.families()})
+        return chosen
+
     def fit(self, meas, effects=None, *, unit=None):
         """The model with ``effects`` fitted to ``meas`` (a result with ``.summary()``)."""
         raise NotImplementedError
@@ -117,7 +127,7 @@ class TestKind:
     def diagnose(self, meas, effects=None, *, unit=None, families=None, candidates=None,
                  max_rounds=None, max_steps=None, log=None):
         """Greedy forward selection of the families ``meas`` needs beyond ``effects``."""
-        chosen = self.parse_effects(effects)
+        chosen = self.baseline_effects(effects)
         pool = list(families) if families is not None else list(self.families())
         for family in pool:
             if family not in self.families():

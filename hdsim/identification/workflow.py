@@ -31,6 +31,8 @@ from hdsim.errors import InputError
 from hdsim.io.measurement import Measurement, load_measurement
 from hdsim.model.catalog import load_unit
 
+del _builtin_kinds  # imported for the kinds it registers, not used by name
+
 __all__ = ["diagnose", "fit", "BenchDiagnosis", "WrongTest", "examine", "examine_record", "prepare_record",
            "drive_scale", "test_kind"]
 
@@ -192,6 +194,7 @@ def diagnose(measurement: Measurement, effects=None, *, unit=None, families=None
     """
     measurement = _record(measurement)
     kind = test_kind(measurement.test)
+    kind.baseline_effects(effects)  # a misnamed family is refused before the record is examined
     prepared, checks, data, wrong, scale = prepare_record(measurement, unit)
     if wrong:
         return WrongTest(measurement, wrong, checks, data)
@@ -219,11 +222,12 @@ def fit(measurement: Measurement, effects=None, *, unit=None):
     Raises
     ------
     InputError
-        A record that is not the test it claims (the sentence of the failed check), or
-        not a record at all.
+        A record that is not the test it claims (the sentence of the failed check), not a
+        record at all, or ``effects`` naming a family the test does not know.
     """
     measurement = _record(measurement)
     kind = test_kind(measurement.test)
+    kind.baseline_effects(effects)  # a misnamed family is refused before the record is examined
     prepared, checks, data, wrong, scale = prepare_record(measurement, unit)
     if wrong:
         raise InputError(f"{measurement.source}: this is not a {measurement.test} test: {wrong}")
