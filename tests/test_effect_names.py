@@ -3,18 +3,21 @@
 before the record is examined, in the library's words rather than the command line's.
 
 Before, a dict with a misspelt family was fitted as the bare model by `hdsim.fit` (the
-string form and `hdsim.diagnose` refused it).
+string form and `hdsim.diagnose` refused it); a family of another test was fitted as nothing
+(``kinematic_error`` on a stiffness record) or called unknown (``ripple``).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import hdsim
 from hdsim.errors import InputError
 from hdsim.identification.fit import fit as fit_model, parse_effects
+from hdsim.io.measurement import make_measurement
 
 EXAMPLE = Path(__file__).parent / "data" / "stiffness_example.csv"
 
@@ -37,3 +40,24 @@ def test_a_dict_is_read_as_family_equals_id():
     assert parse_effects({"friction": "none"}) == {}
     with pytest.raises(InputError, match="unknown friction effect 'dhal'; did you mean dahl"):
         parse_effects({"friction": "dhal"})
+
+
+def _running(test="running_torque"):
+    t = np.arange(0.0, 1.0, 1e-3)
+    return make_measurement(test, t, np.full(t.size, 0.05), None, wg_angle=10.0 * t, ratio=100.0)
+
+
+@pytest.mark.parametrize("test, effects, family", [
+    ("stiffness", "kinematic_error", "kinematic_error"), ("stiffness", "fourier", "kinematic_error"),
+    ("stiffness", "ripple", "ripple"), ("stiffness", {"ripple": "position_torque"}, "ripple"),
+    ("running_torque", "friction,hardening", "hardening"), ("breakaway", ["damping"], "damping")])
+def test_a_family_the_test_cannot_show_is_refused_as_diagnose_families_refuses_it(stiffness, test, effects, family):
+    meas = stiffness if test == "stiffness" else _running(test)
+    with pytest.raises(InputError) as given:
+        hdsim.diagnose(meas, families=[family])
+    expected = str(given.value)
+    assert expected.startswith(f"a {test} test cannot show the {family} family; it shows ")
+    for call in (hdsim.fit, hdsim.diagnose):
+        with pytest.raises(InputError) as info:
+            call(meas, effects)
+        assert str(info.value) == expected

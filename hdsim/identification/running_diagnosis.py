@@ -102,7 +102,7 @@ class RunningTorqueTest(TestKind):
     def diagnose(self, meas, effects=None, *, unit=None, families=None, candidates=None, max_rounds=None,
                  max_steps=None, log=None):
         if families is not None:  # the kind's names (a form's id names its family)
-            families = list(self.parse_effects(families))
+            families = list(self.baseline_effects(families))
         return super().diagnose(meas, effects, unit=unit, families=families, max_rounds=max_rounds, log=log)
 
     def fit_errors(self, fit) -> dict:

@@ -102,14 +102,26 @@ class TestKind:
         raise NotImplementedError
 
     def baseline_effects(self, effects) -> dict:
-        """`parse_effects` with every family checked: a name no test kind knows is refused
-        with the close matches, whatever form ``effects`` takes (text, list or dict)."""
-        chosen = self.parse_effects(effects)
+        """`parse_effects` with every family checked, whatever form ``effects`` takes (text,
+        list or dict): a family of another test is refused as one this test cannot show
+        (`cannot_show`), a name no test knows with its close matches."""
         known = self.families()
+        others = {f for kind in _KINDS.values() for f in kind.families()} | set(known)
+        try:
+            chosen = self.parse_effects(effects)
+        except InputError:
+            shown = next((name for name in _names(effects) if name in others and name not in known), None)
+            if shown is not None:
+                raise self.cannot_show(shown) from None
+            raise
         for family in chosen:
             if family not in known:
-                raise unknown_name("effect family", family, {f for kind in _KINDS.values() for f in kind.families()})
+                raise self.cannot_show(family) if family in others else unknown_name("effect family", family, others)
         return chosen
+
+    def cannot_show(self, family: str) -> InputError:
+        """The refusal of a family this test cannot show (another test's)."""
+        return InputError(f"a {self.name} test cannot show the {family} family; it shows {', '.join(self.families())}")
 
     def fit(self, meas, effects=None, *, unit=None):
         """The model with ``effects`` fitted to ``meas`` (a result with ``.summary()``)."""
@@ -131,7 +143,7 @@ class TestKind:
         pool = list(families) if families is not None else list(self.families())
         for family in pool:
             if family not in self.families():
-                raise InputError(f"a {self.name} test cannot show the {family} family")
+                raise self.cannot_show(family)
         session = self.session(meas, chosen, unit=unit, candidates=candidates, max_steps=max_steps)
         return run_diagnosis(self, session, pool, max_rounds=max_rounds, log=log)
 
@@ -236,6 +248,12 @@ class TestKind:
         from hdsim.identification.report_page import diagnosis_page  # matplotlib only when asked
 
         return diagnosis_page(diagnosis, directory, summary, scale)
+
+
+def _names(effects) -> list[str]:
+    """The family or effect names of ``effects`` as the user wrote them (text, list or dict)."""
+    items = effects.split(",") if isinstance(effects, str) else list(effects or ())
+    return [str(item).partition("=")[0].strip() for item in items]
 
 
 def register_test_kind(kind: TestKind) -> TestKind:

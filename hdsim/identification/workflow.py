@@ -194,7 +194,8 @@ def diagnose(measurement: Measurement, effects=None, *, unit=None, families=None
     """
     measurement = _record(measurement)
     kind = test_kind(measurement.test)
-    kind.baseline_effects(effects)  # a misnamed family is refused before the record is examined
+    for names in (effects, families):  # a misnamed family is refused before the record is examined
+        kind.baseline_effects(names)
     prepared, checks, data, wrong, scale = prepare_record(measurement, unit)
     if wrong:
         return WrongTest(measurement, wrong, checks, data)
