@@ -164,8 +164,9 @@ class Diagnosis:
     def report(self, directory, summary: dict | None = None, scale=None):
         """Write the report page (``index.html``, ``index.md``, the figures) into ``directory``
         (``summary``: the outcome and checks to show on top; ``scale``: the drive's datasheet
-        numbers); returns the path of ``index.html``."""
-        return self.kind.write_report(self, directory, summary or {}, scale)
+        numbers); returns the path of ``index.html``. InputError when ``directory`` is a file
+        (`hdsim.identification.test_kinds.TestKind.report_folder`)."""
+        return self.kind.write_report(self, self.kind.report_folder(directory), summary or {}, scale)
 
     def to_json(self) -> dict:
         key = self.kind.error_key

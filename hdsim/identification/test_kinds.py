@@ -26,8 +26,10 @@ A session (`TestKind.session`) is the kind's state for one record. The engine re
 from __future__ import annotations
 
 from collections.abc import Mapping
+from pathlib import Path
 from typing import ClassVar
 
+from hdsim.atomic import check_writable_folder
 from hdsim.errors import InputError, unknown_name
 from hdsim.identification.engine import run_diagnosis
 from hdsim.identification.policy import Thresholds
@@ -38,6 +40,8 @@ __all__ = ["TestKind", "FamilyKnowledge", "register_test_kind", "unregister_test
 
 #: test name -> registered kind
 _KINDS: dict[str, "TestKind"] = {}
+#: the pages a report writes into its folder
+REPORT_PAGES = ("index.html", "index.md")
 
 
 class TestKind:
@@ -241,6 +245,22 @@ class TestKind:
         (`hdsim.identification.predictions.Prediction`), for the report pages (``scale``:
         the drive's datasheet numbers); none here."""
         return []
+
+    @staticmethod
+    def report_folder(directory) -> Path:
+        """``directory`` as the folder a report is written into (made when it is written),
+        checked before anything is drawn: InputError in one line when it is a file, cannot be
+        written into, or holds a folder where the report's page goes."""
+        folder = Path(directory)
+        if folder.exists() and not folder.is_dir():
+            raise InputError(f"{folder} is a file, not a folder; give a folder for the report (it is created if "
+                             "missing)")
+        check_writable_folder(folder)
+        for name in REPORT_PAGES:
+            if (folder / name).is_dir():
+                raise InputError(f"{folder / name} is a folder, so the report cannot be written there; remove it "
+                                 "or give another folder")
+        return folder
 
     def write_report(self, diagnosis, directory, summary: dict, scale):
         """Write the report page of ``diagnosis`` into ``directory`` (``summary``: its JSON;

@@ -134,7 +134,9 @@ class BenchDiagnosis:
         return out
 
     def report(self, directory) -> Path:
-        """Write the report (``index.html``, ``index.md`` and the figures) into ``directory``."""
+        """Write the report (``index.html``, ``index.md`` and the figures) into ``directory``
+        (InputError when it is a file, `TestKind.report_folder`)."""
+        directory = self.kind.report_folder(directory)
         self.report_path = Path(self.kind.write_report(self.diagnosis, directory, self.to_json(), self.scale))
         return self.report_path
 
@@ -165,7 +167,7 @@ class WrongTest:
         """Write a page that says why nothing was fitted (``index.html`` and ``index.md``)."""
         from hdsim.identification.report_page import wrong_test_page
 
-        self.report_path = wrong_test_page(self.measurement, directory, self.to_json())
+        self.report_path = wrong_test_page(self.measurement, TestKind.report_folder(directory), self.to_json())
         return self.report_path
 
 
