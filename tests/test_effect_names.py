@@ -61,3 +61,12 @@ def test_a_family_the_test_cannot_show_is_refused_as_diagnose_families_refuses_i
         with pytest.raises(InputError) as info:
             call(meas, effects)
         assert str(info.value) == expected
+
+
+def test_two_effects_of_one_family_are_refused_in_python_words(stiffness, cli, tmp_path):
+    for effects in ("dahl,maxwell_slip", ["dahl", "friction=maxwell_slip"]):
+        with pytest.raises(InputError, match=r"^the effects name two friction effects, dahl and maxwell_slip; give "
+                                             r"one per family$"):
+            hdsim.fit(stiffness, effects)
+    code, _, err = cli("fit", EXAMPLE, "--effects", "dahl,maxwell_slip", cwd=tmp_path)
+    assert code == 2 and "name two friction effects, dahl and maxwell_slip" in err and "Traceback" not in err

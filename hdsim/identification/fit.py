@@ -82,7 +82,8 @@ def parse_effects(text) -> dict[str, str]:
             raise unknown_name("effect family or effect id", family,
                                list(fx.FAMILIES) + list(by_id))
         if family in chosen and chosen[family] != effect_id:
-            raise InputError(f"--effects names two {family} effects: {chosen[family]} and {effect_id}")
+            raise InputError(f"the effects name two {family} effects, {chosen[family]} and {effect_id}; give one "
+                             "per family")
         chosen[family] = effect_id
     return {family: chosen[family] for family in SLOTS if family in chosen}
 
