@@ -71,6 +71,7 @@ def register(subparsers) -> None:
 def run(args) -> int:
     from hdsim.sensitivity import models
     from hdsim.sensitivity.evaluate import open_executor
+    from hdsim.sensitivity.problem import CLI_WORDING
     from hdsim.sensitivity.study import run_study
 
     t0 = time.perf_counter()
@@ -91,12 +92,12 @@ def run(args) -> int:
     # broken process pool included, is the program's failure and reaches main (exit 1)
     func, problem, output, model, analytic = _resolve(args, models)
     try:
-        with open_executor(args.executor, workers) as executor:
+        with open_executor(args.executor, workers, CLI_WORDING) as executor:
             result = run_study(func, problem, n, seed=seed, second_order=args.second_order,
                                replicates=reps, executor=executor, workers=workers,
                                chunksize=chunksize, out=args.out, resume=args.resume,
                                retry_failed=args.retry_failed, target_width=target,
-                               model=model)
+                               model=model, wording=CLI_WORDING)
     except OSError as exc:
         from hdsim.cli import environment_error
 

@@ -20,6 +20,7 @@ import warnings
 import numpy as np
 
 from hdsim.errors import InputError
+from hdsim.sensitivity.problem import PYTHON_WORDING, Wording
 
 
 class DesignError(InputError):
@@ -32,10 +33,10 @@ def block_size(num_vars: int, second_order: bool) -> int:
 
 
 def is_power_of_two(n: int) -> bool:
-    return isinstance(n, (int, np.integer)) and n > 0 and (n & (n - 1)) == 0
+    return (isinstance(n, (int, np.integer)) and not isinstance(n, bool)) and n > 0 and (n & (n - 1)) == 0
 
 
-def check_sizes(n: int, replicates: int) -> int:
+def check_sizes(n: int, replicates: int, wording: Wording = PYTHON_WORDING) -> int:
     """Validate the base points N and the replicates R of a study.
 
     Parameters
@@ -44,6 +45,9 @@ def check_sizes(n: int, replicates: int) -> int:
         Base points N; a power of 2, at least 4 per replicate.
     replicates : int
         Replicates R; a power of 2, at least 2.
+    wording : Wording
+        How the messages name the options: ``n`` and ``replicates`` (the Python API,
+        default) or ``--n`` and ``--replicates`` (`CLI_WORDING`).
 
     Returns
     -------
@@ -53,25 +57,30 @@ def check_sizes(n: int, replicates: int) -> int:
     Raises
     ------
     InputError
-        On an N or R that breaks these rules, with the nearest valid N.
+        On an N or R that breaks these rules; for N, with the nearest N that is valid with R.
     """
-    if not is_power_of_two(n):
-        raise InputError(f"--n must be a power of 2 (Sobol' balance), got {n}; "
-                         f"nearest: {_nearest_pow2(n)}")
     if not is_power_of_two(replicates) or replicates < 2:
-        raise InputError(f"--replicates must be a power of 2 and at least 2, got {replicates}")
+        raise InputError(f"{wording.replicates} must be a power of 2 and at least 2, got {replicates!r}")
+    if not is_power_of_two(n):
+        raise InputError(f"{wording.n} must be a power of 2 (Sobol' balance), got {n!r}; "
+                         f"nearest: {nearest_valid_n(n, replicates)}")
     if n < 4 * replicates:
-        raise InputError(f"--n {n} is too small for {replicates} replicates: "
-                         f"need N >= {4 * replicates} (4 base points per replicate)")
+        raise InputError(f"{wording.given(wording.n, n)} is too small for "
+                         f"{wording.given(wording.replicates, replicates)}: "
+                         f"need {wording.n} >= {4 * replicates} (4 base points per replicate)")
     return n // replicates
 
 
-def _nearest_pow2(n) -> int:
+def nearest_valid_n(n, replicates: int = 4) -> int:
+    """The power of 2 nearest ``n`` (on a log scale) that `check_sizes` accepts with
+    ``replicates``: at least 4 base points per replicate."""
     try:
-        n = max(int(n), 1)
+        n = max(float(n), 1.0)
     except (TypeError, ValueError):
-        return 1024
-    return 1 << max(0, round(np.log2(n)))
+        n = 1024.0
+    if not np.isfinite(n):
+        n = 1024.0
+    return max(1 << max(0, round(np.log2(n))), 4 * replicates)
 
 
 def replicate_seed(seed: int, replicate: int) -> int:

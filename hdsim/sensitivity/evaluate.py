@@ -21,6 +21,7 @@ import numpy as np
 
 from hdsim.errors import InputError
 from hdsim.sensitivity.design import fingerprint
+from hdsim.sensitivity.problem import PYTHON_WORDING, Wording
 
 
 class ModelError(InputError):
@@ -185,8 +186,14 @@ def _gnu_openmp_started() -> bool:
         return False
 
 
+def check_workers(workers, wording: Wording = PYTHON_WORDING) -> None:
+    """InputError unless ``workers`` is a whole number of processes, at least 1."""
+    if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
+        raise InputError(f"{wording.workers} must be a whole number, at least 1, got {workers!r}")
+
+
 @contextlib.contextmanager
-def open_executor(spec: str | None = "local", workers: int = 2):
+def open_executor(spec: str | None = "local", workers: int = 2, wording: Wording = PYTHON_WORDING):
     """Yield an executor for ``'local'`` (None when ``workers == 1``) or ``'dask://HOST:PORT'``.
 
     The Dask client is imported lazily (``dask[distributed]`` is optional) and
@@ -199,6 +206,8 @@ def open_executor(spec: str | None = "local", workers: int = 2):
         ``'local'`` (default) or ``'dask://HOST:PORT'``.
     workers : int
         Processes of the local pool; 1 evaluates in-process.
+    wording : Wording
+        How the messages name the options (``workers``; `CLI_WORDING`: ``--workers``).
 
     Yields
     ------
@@ -211,9 +220,8 @@ def open_executor(spec: str | None = "local", workers: int = 2):
         On a bad spec or worker count, a missing ``distributed`` package or an
         unreachable scheduler.
     """
+    check_workers(workers, wording)
     spec = (spec or "local").strip()
-    if workers < 1:
-        raise InputError(f"--workers must be at least 1, got {workers}")
     if spec == "local":
         if workers == 1:
             yield None
@@ -222,14 +230,14 @@ def open_executor(spec: str | None = "local", workers: int = 2):
             yield pool
         return
     if not spec.startswith("dask://") or len(spec) <= len("dask://"):
-        raise InputError(f"--executor must be 'local' or 'dask://HOST:PORT', got '{spec}'")
+        raise InputError(f"{wording.executor} must be 'local' or 'dask://HOST:PORT', got '{spec}'")
     address = spec[len("dask://"):]
     if "://" not in address:
         address = "tcp://" + address
     try:
         from distributed import Client
     except ImportError:
-        raise InputError("--executor dask:// needs dask[distributed]: "
+        raise InputError(f"{wording.executor} dask:// needs dask[distributed]: "
                          "pip install 'hdsim[dask]'") from None
     try:
         client = Client(address, timeout="10s")
@@ -263,7 +271,8 @@ def _wait_for_a_worker(client, address: str) -> None:
 
 
 def evaluate(func, X, executor=None, *, workers=2, chunksize=None, rows=None,
-             on_chunk=None, progress=True, max_in_flight=None, succeeded_before=0) -> Evaluation:
+             on_chunk=None, progress=True, max_in_flight=None, succeeded_before=0,
+             wording: Wording = PYTHON_WORDING) -> Evaluation:
     """Evaluate ``func`` on the rows of ``X``; outputs land at their row positions.
 
     Parameters
@@ -296,6 +305,9 @@ def evaluate(func, X, executor=None, *, workers=2, chunksize=None, rows=None,
         Rows of the same study that the model ran before this call (a study resumed):
         a model that ran on any row does not fail everywhere, so failing again on rows
         it had refused (``--resume --retry-failed``) does not stop the study.
+    wording : Wording
+        How a `ModelError` says to resume (``resume=True, retry_failed=True``; `CLI_WORDING`:
+        ``--resume --retry-failed``).
 
     Returns
     -------
@@ -315,7 +327,7 @@ def evaluate(func, X, executor=None, *, workers=2, chunksize=None, rows=None,
     def collected(labels, y, key, errors):  # each chunk is written before the model is judged
         if on_chunk is not None:
             on_chunk(labels, y, key, errors)
-        _abort_if_broken(out, rows, labels, errors, succeeded_before)
+        _abort_if_broken(out, rows, labels, errors, succeeded_before, wording.retry)
 
     # a model may say what chunk suits it (the simulator batches rows inside one solve)
     size = int(chunksize or getattr(func, "chunksize", None) or default_chunksize(n))
@@ -403,7 +415,8 @@ def _collect(out, s, e, result, rows, on_chunk, bar):
     bar.update(e - s)
 
 
-def _abort_if_broken(out, rows, labels, errors, succeeded_before: int = 0):
+def _abort_if_broken(out, rows, labels, errors, succeeded_before: int = 0,
+                     retry: str = PYTHON_WORDING.retry):
     """ModelError for a model that is broken, not one whose physics refuses some rows: a
     programming error on any row, or every row failing, judged over the whole study. A
     resumed study that re-runs only its failed rows (``--retry-failed``) sees nothing but
@@ -413,14 +426,14 @@ def _abort_if_broken(out, rows, labels, errors, succeeded_before: int = 0):
     for i, message in errors.items():
         if message.split(":", 1)[0] in PROGRAMMING_ERRORS:
             raise ModelError(f"the model raised {message} (row {labels[i]}): a bug in the model, "
-                             "not its physics; fix it, then rerun with --resume --retry-failed")
+                             f"not its physics; fix it, then rerun with {retry}")
     done = out.completed
     # Judge only once a few hundred rows are in; a whole failing region is possible.
     if not succeeded_before and done >= min(len(out.y), 256) and len(out.failures) >= done:
         first = min(out.failures)
         raise ModelError(f"the model failed on all {done} rows evaluated so far "
                          f"(first: row {rows[first]}: {out.failures[first]}); "
-                         f"fix the model, then rerun with --resume --retry-failed")
+                         f"fix the model, then rerun with {retry}")
 
 
 def _progress(total, enabled):

@@ -33,8 +33,9 @@ _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 
 @dataclass(frozen=True)
 class Wording:
-    """How `build_problem`'s messages name the study's options: as the command line or the
-    Python API (`hdsim.sobol`) spells them. Templates take ``{name}`` (and ``{text}``)."""
+    """How a study's messages name its options: as the command line (``--n``) or the Python
+    API (``n``, of `hdsim.sobol`, `hdsim.sensitivity.run_study`) spells them. Templates take
+    ``{name}`` (and ``{text}``)."""
 
     bounds: str     # the bounds option, e.g. "--bounds"
     dists: str      # the distributions option
@@ -42,11 +43,27 @@ class Wording:
     bounds_of: str  # explicit bounds of one parameter
     dist_of: str    # a distribution of one parameter, ``{text}`` its value
     python: bool    # True: bounds are (low, high) pairs, checked with the API's wording
+    # the study's other options (`hdsim.sensitivity.design.check_sizes`, `open_executor`,
+    # `run_study`, `open_store`)
+    n: str = "--n"
+    replicates: str = "--replicates"
+    workers: str = "--workers"
+    executor: str = "--executor"
+    target_width: str = "--target-width"
+    out: str = "--out"
+    resume: str = "--resume"            # as it is switched on
+    retry: str = "--resume --retry-failed"
+
+    def given(self, option: str, value) -> str:
+        """An option with the value it was given: ``--n 8`` or ``n=8``."""
+        return f"{option}={value!r}" if self.python else f"{option} {value}"
 
 
 CLI_WORDING = Wording("--bounds", "--dist", "--range P%", "--bounds {name}=LO:HI", "--dist {name}={text}", False)
 PYTHON_WORDING = Wording("bounds", "dists", "range=FRACTION", "bounds={{'{name}': (low, high)}}",
-                         "dists={{'{name}': '{text}'}}", True)
+                         "dists={{'{name}': '{text}'}}", True, n="n", replicates="replicates",
+                         workers="workers", executor="executor", target_width="target_width", out="out",
+                         resume="resume=True", retry="resume=True, retry_failed=True")
 
 
 @dataclass(frozen=True)

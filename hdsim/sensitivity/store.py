@@ -24,6 +24,7 @@ import numpy as np
 from hdsim.atomic import atomic_path
 from hdsim.errors import InputError
 from hdsim.sensitivity.layout import PIECE, Layout, runs
+from hdsim.sensitivity.problem import PYTHON_WORDING, Wording
 
 FORMAT, VERSION = "hdsim-sobol-study", 1
 PENDING, DONE, FAILED = 0, 1, 2
@@ -161,7 +162,7 @@ class RowReader:
         return self.store.read("X", self.rows[sl])
 
 
-def open_store(definition: dict, n: int, path=None, resume=False):
+def open_store(definition: dict, n: int, path=None, resume=False, wording: Wording = PYTHON_WORDING):
     """Create, reopen or extend the study for ``definition`` with ``n`` base points.
 
     Parameters
@@ -174,6 +175,8 @@ def open_store(definition: dict, n: int, path=None, resume=False):
         Study file; None keeps the study in memory.
     resume : bool
         Continue an existing file (extended when ``n`` is larger than its N).
+    wording : Wording
+        How the messages name ``out`` and ``resume`` (`CLI_WORDING`: ``--out``, ``--resume``).
 
     Returns
     -------
@@ -193,13 +196,13 @@ def open_store(definition: dict, n: int, path=None, resume=False):
         _create(path, Layout(definition, n))
         return H5Store(path)
     if not resume:
-        raise InputError(f"{path} exists; pass --resume to continue it, or choose another --out")
+        raise InputError(f"{path} exists; pass {wording.resume} to continue it, or choose another {wording.out}")
     store = H5Store(path)
     diff = _differences(store.definition, definition)
     if diff:
         store.close()
         raise InputError(f"{path} holds a different study ({'; '.join(diff)}); "
-                         f"choose another --out")
+                         f"choose another {wording.out}")
     if n > store.n:
         store.close()
         _extend(path, n)

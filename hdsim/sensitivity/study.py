@@ -17,7 +17,8 @@ from hdsim.errors import InputError
 from hdsim.sensitivity.analysis import check_outputs, convergence, indices
 from hdsim.sensitivity.checks import consistency_checks, dropped_flags, failed_messages, resolution_flags
 from hdsim.sensitivity.design import check_sizes
-from hdsim.sensitivity.evaluate import evaluate
+from hdsim.sensitivity.evaluate import check_workers, evaluate
+from hdsim.sensitivity.problem import PYTHON_WORDING, Wording
 from hdsim.sensitivity.store import DONE, PENDING, open_store
 
 MAX_LISTED_FAILURES = 20
@@ -69,7 +70,7 @@ class StudyResult:
 def run_study(func, problem, n, *, seed=0, second_order=False, replicates=4, executor=None,
               workers=2, chunksize=None, out=None, resume=False, retry_failed=False,
               target_width=None, model=None, conf_level=0.95, num_resamples=100,
-              progress=True, log=None) -> StudyResult:
+              progress=True, log=None, wording: Wording = PYTHON_WORDING) -> StudyResult:
     """Sample, evaluate (resumably), check and analyse a Sobol' study.
 
     Parameters
@@ -114,6 +115,9 @@ def run_study(func, problem, n, *, seed=0, second_order=False, replicates=4, exe
         Show a progress bar on stderr when it is a terminal.
     log : callable, optional
         ``log(line)`` for warnings and progress lines; default: stderr.
+    wording : Wording
+        How messages name the options: as these keywords (default), or as ``hdsim sobol``
+        does (`hdsim.sensitivity.problem.CLI_WORDING`: ``--n``, ``--replicates``, …).
 
     Returns
     -------
@@ -130,15 +134,17 @@ def run_study(func, problem, n, *, seed=0, second_order=False, replicates=4, exe
         study before.
     """
     t0, log = time.perf_counter(), log or _stderr
-    check_sizes(n, replicates)
+    check_sizes(n, replicates, wording)
+    if executor is None:
+        check_workers(workers, wording)
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InputError(f"seed must be a whole number, 0 or more, got {seed!r}")
     if target_width is not None and not target_width > 0:
-        raise InputError(f"--target-width must be > 0, got {target_width}")
+        raise InputError(f"{wording.target_width} must be > 0, got {target_width}")
     definition = {"problem": problem.to_dict(), "seed": int(seed),
                   "second_order": bool(second_order), "replicates": int(replicates),
                   "model": model or {}}
-    store = open_store(definition, n, out, resume)
+    store = open_store(definition, n, out, resume, wording)
     evaluated_now, n_stage = 0, None
     try:
         before = store.counts(n)
@@ -148,7 +154,7 @@ def run_study(func, problem, n, *, seed=0, second_order=False, replicates=4, exe
                 # the guard against a broken model judges the whole study, not the rows run now
                 ev = evaluate(func, store.reader(rows), executor, workers=workers,
                               chunksize=chunksize, rows=rows, on_chunk=store.write,
-                              progress=progress, succeeded_before=store.counts()["done"])
+                              progress=progress, succeeded_before=store.counts()["done"], wording=wording)
                 evaluated_now += ev.evaluations
             res, width = _analyse_store(store, n_stage, conf_level, num_resamples, seed)
             if target_width is not None:
