@@ -8,6 +8,8 @@ are read from the torque–twist loop (`hdsim.scenarios.locked_metrics`, docs/ph
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from hdsim.errors import InputError
@@ -144,6 +146,57 @@ def refuse_if_not_static(model: HarmonicDrive, scenario) -> None:
                          f"load.rate <= {fastest:.3g}")
 
 
+# ------------------------------------------------------------------ why a dynamic run is slow
+#: A friction law that sticks much stiffer than the spring (a Dahl law fitted to a stiffness
+#: record whose loop shows no presliding: sigma 1.3e8 N·m/rad on a 2e4 N·m/rad spring) puts
+#: the output inertia on a stiff mode (40 kHz there, 57 kHz against a reversal). Its stiffness
+#: is one-sided, 2σ against the reversal and ~0 with it, and only the friction's own loss,
+#: which vanishes at small amplitude, takes energy out. Without damping the mode rings after
+#: each reversal, and while its swing in speed exceeds the ramp's own slow speed the speed
+#: changes sign on every swing: the solver follows each switch of the friction's direction
+#: step by step. That is the model's physics, not the solver's setup (at 510×: rtol 1e-4
+#: 67,000 evaluations a cycle, 1e-8 1.6 million, LSODA 480,000; BDF 48,000, but Radau is the
+#: default for the lightly damped mode, `SolverOptions`), and the dynamic run pays for it.
+#: Measured on the ±4 % test, per torque cycle (rhs evaluations): 20,000 sticking at 250×
+#: the spring undamped, 164,000 at 510×, 1.1 million at 6600× (2–3 min for the test); at
+#: 6600× a damping ratio of the stick mode of 1e-4 brings it to 91,000, of 3e-5 only to
+#: 580,000. A run beyond both bounds says so before it starts (`SlowRunWarning`).
+SLOW_STICKING_RATIO = 300.0
+SLOW_DAMPING_RATIO = 5e-5
+
+
+class SlowRunWarning(UserWarning):
+    """A dynamic run of the locked bench that will take long, and why."""
+
+
+def sticking_mode(model: HarmonicDrive) -> dict[str, float]:
+    """The output on its sticking friction: the friction's path tangent at rest over the
+    spring's stiffness, the mode's frequency [Hz] and its damping ratio (the sample of a
+    batch with the largest ratio)."""
+    K = np.atleast_1d(np.asarray(model.base_stiffness, dtype=float))
+    rest = np.zeros((len(model.friction.state_names), K.size))
+    tangent = np.broadcast_to(np.asarray(model.friction.path_tangent(rest, 1.0, 0.0 * K, K), dtype=float), K.shape)
+    J = np.broadcast_to(np.asarray(model.drive.J_out, dtype=float), K.shape)
+    c = np.broadcast_to(np.asarray(model.damping.coefficient_at(1.0), dtype=float), K.shape)
+    m = int(np.argmax(tangent / K))
+    return {"sticking_ratio": float(tangent[m] / K[m]), "frequency_Hz": float(np.sqrt(tangent[m] / J[m]) / (2 * np.pi)),
+            "damping_ratio": float(c[m] / (2.0 * np.sqrt(tangent[m] * J[m])))}
+
+
+def slow_run_reason(model: HarmonicDrive) -> str | None:
+    """Why a dynamic run of ``model`` on this bench will be slow, or None (`SLOW_STICKING_RATIO`)."""
+    mode = sticking_mode(model)
+    if mode["sticking_ratio"] <= SLOW_STICKING_RATIO or mode["damping_ratio"] >= SLOW_DAMPING_RATIO:
+        return None
+    return (f"solve_ivp will take minutes on this drive: its friction sticks at {mode['sticking_ratio']:.3g} times "
+            f"the spring's stiffness and the output rings on it at {mode['frequency_Hz'] / 1e3:.3g} kHz, damped at a "
+            f"ratio of {mode['damping_ratio']:.2g}; at every torque reversal the solver follows that ringing step by "
+            f"step (the model's physics: docs/sensitivity.md, 'Which evaluator'). Where the loop's metrics are "
+            f"what is needed, evaluator='quasistatic' gives them in a fraction of a second (the ±4 % lost motion "
+            f"within 1e-4; hysteresis, centre-line lost motion and K1 within ~2 %), and 'auto' takes it where "
+            f"that holds")
+
+
 def run_locked(model: HarmonicDrive, scenario, *, samples_per_segment: int | None = None,
                options: SolverOptions | None = None):
     """Run a locked-WG scenario (the runner of `LOCKED`).
@@ -169,6 +222,9 @@ def run_locked(model: HarmonicDrive, scenario, *, samples_per_segment: int | Non
     options = ramp_step_bound(scenario, options)
     _refuse_if_too_large(scenario.source, scenario.data["load"], n, model.batch_size, options.max_step)
     refuse_if_not_static(model, scenario)
+    reason = slow_run_reason(model)
+    if reason:
+        warnings.warn(reason, SlowRunWarning, stacklevel=3)  # at the caller of run_scenario
     rated = model.drive.rated_torque
     system = locked_wave_generator(model, scenario.torque_profile(rated))
     t_eval = scenario.sample_times(n)

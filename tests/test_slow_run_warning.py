@@ -1,0 +1,61 @@
+"""A dynamic locked-bench run that will take minutes says why before it starts.
+
+A drive fitted to a stiffness record came out with a Dahl friction sticking at 6600 times
+the spring's stiffness and no damping; ``run_scenario(fit.drive, "lost_motion")`` then took
+2–3 minutes (2.2 million right-hand-side evaluations: the output rings on the sticking
+friction at every reversal) without a word, where the quasi-static evaluator gives the
+same lost motion in 0.02 s. The stand-in integrator here stops the run at once, so the
+file takes a fraction of a second.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import pytest
+
+from hdsim.model.catalog import load_unit
+from hdsim.model.effects import DahlFriction, NoDamping, ViscousDamping
+from hdsim.scenarios import locked
+from hdsim.scenarios.locked import SlowRunWarning, slow_run_reason, sticking_mode
+from hdsim.scenarios.run import run_scenario
+
+
+@pytest.fixture(scope="module")
+def sticking():
+    """The fitted drive's friction (0.52 N·m, sigma 1.3e8 N·m/rad) without damping."""
+    return load_unit("CSG-25-100").with_effects(friction=DahlFriction(torque_max=0.52, sigma=1.3e8),
+                                                damping=NoDamping())
+
+
+class _Stopped(Exception):
+    pass
+
+
+def test_a_slow_dynamic_run_warns_before_it_integrates(sticking, monkeypatch):
+    def integrate(*args, **kwargs):
+        raise _Stopped
+
+    monkeypatch.setattr(locked, "integrate", integrate)
+    with pytest.warns(SlowRunWarning, match=r"its friction sticks at 4\.\d+e\+03 times the spring's stiffness") as caught, \
+            pytest.raises(_Stopped):
+        run_scenario(sticking, "lost_motion")
+    assert caught[0].filename == __file__  # pointed at the caller's run_scenario line
+    assert "evaluator='quasistatic'" in str(caught[0].message)
+
+
+def test_the_quasistatic_evaluator_runs_it_without_a_word(sticking):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SlowRunWarning)
+        assert run_scenario(sticking, "lost_motion", evaluator="auto").result.solver["method"] == "quasistatic"
+
+
+def test_damping_or_a_softer_sticking_makes_no_slow_run(sticking):
+    mode = sticking_mode(sticking)
+    assert mode["damping_ratio"] == 0.0 and mode["frequency_Hz"] > 3e4
+    assert slow_run_reason(load_unit("CSG-25-100")) is None
+    # a damping ratio of 1e-4 on the stick mode took the run from 1.1 million evaluations a cycle to 91,000
+    damped = sticking.with_effects(damping=ViscousDamping(coefficient=0.2))
+    assert sticking_mode(damped)["damping_ratio"] > 1e-4 and slow_run_reason(damped) is None
+    # 250 times the spring, undamped: 20,000 evaluations a cycle
+    assert slow_run_reason(sticking.with_updates({"friction.sigma": 250 * float(sticking.base_stiffness)})) is None
