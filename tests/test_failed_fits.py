@@ -25,10 +25,12 @@ def wrong_ratio():
 
 
 def test_a_candidate_whose_fit_fails_is_rejected_with_its_reason(wrong_ratio):
-    d = diagnose(wrong_ratio, families=["kinematic_error"], max_rounds=1)
+    said = []
+    d = diagnose(wrong_ratio, families=["kinematic_error"], max_rounds=1, log=said.append)
     entry = next(c for c in d.to_json()["ranking"] if c["family"] == "kinematic_error")
     assert entry["passes"] is False and "exceeds 0.01 rad" in entry["why"]
     assert d.added == []
+    assert "round 1: kinematic_error failed" in said  # the round log, not "kinematic_error inf"
 
 
 def test_the_baselines_own_failure_names_the_record(wrong_ratio):

@@ -234,14 +234,14 @@ def run_diagnosis(kind, session, pool: list, *, max_rounds: int | None = None, l
             if c.fit is not None:
                 judge_nested(c, c.fit, step.fit.rss, f"{c.family}={c.effect} over {'+'.join(step.effects) or 'base'}")
         step.candidates = _best_form_per_family(tried)
-        say(f"round {state.round_no}: " + ", ".join(f"{c.family} {c.score:.1f}"
+        say(f"round {state.round_no}: " + ", ".join(f"{c.family} {_shown_score(c)}"
                                                     for c in sorted(step.candidates, key=lambda c: c.score)))
         forms = session.other_forms(current, set(state.reshaped))
         reshapes = None
         if wants_other_forms(step.candidates, bool(forms), state):
             step.reshapes = reshapes = session.try_models(step, forms, residual)
             say(f"round {state.round_no}, other forms: "
-                + ", ".join(f"{c.family}={c.effect} {c.score:.1f}" for c in reshapes))
+                + ", ".join(f"{c.family}={c.effect} {_shown_score(c)}" for c in reshapes))
         decision = decide_round(step.candidates, reshapes, state, kind.thresholds)
         ambiguous += [entry for entry in decision.ambiguous if kind.keeps_entry(entry, ambiguous)]
         chosen = decision.chosen
@@ -272,6 +272,12 @@ def run_diagnosis(kind, session, pool: list, *, max_rounds: int | None = None, l
                      confidence=session.confidence(steps),
                      findings_before=session.findings(steps[0], whiteness),
                      findings_after=session.findings(step, whiteness))
+
+
+def _shown_score(candidate) -> str:
+    """A candidate's score for the round log; a candidate whose fit failed (score inf, null
+    in the JSON beside its ``why``) reads "failed"."""
+    return f"{candidate.score:.1f}" if math.isfinite(candidate.score) else "failed"
 
 
 def _settle_stand_in(steps: list, reshaped: list, ambiguous: list) -> tuple[list, list, list]:
