@@ -28,6 +28,7 @@ PYTHON_CASES = [
     (dict(workers=0), r"^workers must be a whole number, at least 1, got 0$"),
     (dict(n=64, target_width=0.0), r"^target_width must be > 0"),
     (dict(executor="nowhere"), r"^executor must be 'local' or 'dask://HOST:PORT'"),
+    (dict(resume=True), r"^resume=True needs out: the study file to continue$"),  # was ignored
 ]
 
 

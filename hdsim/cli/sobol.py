@@ -79,7 +79,7 @@ def run(args) -> int:
     reps, workers = _int(args.replicates, "--replicates"), _int(args.workers, "--workers")
     chunksize = _int(args.chunksize, "--chunksize", minimum=1) if args.chunksize else None
     target = _float(args.target_width, "--target-width") if args.target_width else None
-    if args.resume and not args.out:
+    if args.resume and not args.out:  # before the study is built; `open_store` says it in Python's words
         raise InputError("--resume needs --out STUDY.h5")
     # where the results go is checked before the study, not after its first chunk
     if args.out:

@@ -186,10 +186,13 @@ def open_store(definition: dict, n: int, path=None, resume=False, wording: Wordi
     Raises
     ------
     InputError
-        If ``path`` exists without ``resume``, holds a study with a different
+        If ``resume`` is given without ``path``, ``path`` exists without ``resume``,
+        holds a study with a different
         definition, or is open in another process.
     """
     if path is None:
+        if resume:  # nothing to continue: a study in memory is lost with its process
+            raise InputError(f"{wording.resume} needs {wording.out}: the study file to continue")
         return MemoryStore(definition, n)
     path = Path(path)
     if not path.exists():
