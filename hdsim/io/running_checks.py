@@ -57,6 +57,12 @@ TEMPERATURE_SPAN = 10.0
 #: torque noise over the running level above which the record says little
 NOISE_SHARE = 0.5
 RPM_PER_RAD_S = 30.0 / math.pi
+#: a gap in the time stamps up to this many sample intervals is bridged by interpolation
+#: when differentiating the angle (dropped rows); a longer one is a pause that splits the record
+MAX_BRIDGE = 100
+#: a sample interval within this of a whole number of the typical one counts as that many
+#: (a jittered stamp: one; a dropped row: two) when differentiating the angle
+WHOLE_INTERVAL = 0.45
 
 
 @dataclass(frozen=True)
@@ -73,6 +79,9 @@ def speed_and_acceleration(time, angle, window_s: float = 0.01) -> tuple[np.ndar
 
     The windows span about ``window_s`` (speed) and twice that (acceleration), at least 7
     and 11 samples: long enough to average encoder steps, short enough to follow a ramp.
+    A log with dropped rows is bridged: its clock counts sample intervals, not rows (the
+    angle interpolated across each gap), and a log whose intervals are no whole numbers of
+    the typical one is read in time; a gap longer than `MAX_BRIDGE` intervals splits it.
     """
     # imported here: scipy.signal costs about 0.4 s, and only a sweep's record needs it (a
     # command on a locked record registers the running-torque kind without running it)
@@ -80,12 +89,37 @@ def speed_and_acceleration(time, angle, window_s: float = 0.01) -> tuple[np.ndar
 
     t = np.asarray(time, dtype=float)
     x = np.asarray(angle, dtype=float)
+    if x.size < 5:  # too few rows for a cubic's derivatives (a stretch between pauses)
+        speed = np.gradient(x, t) if x.size > 1 else np.zeros(x.size)
+        return speed, (np.gradient(speed, t) if x.size > 1 else np.zeros(x.size))
     dt = float(np.median(np.diff(t)))
+    pauses = np.flatnonzero(np.diff(t) > MAX_BRIDGE * dt) + 1
+    if pauses.size:  # a logger's pause is not bridged: each stretch between pauses on its own
+        parts = [speed_and_acceleration(t[a:b], x[a:b], window_s) if b - a > 1 else (np.zeros(b - a),) * 2
+                 for a, b in zip(np.r_[0, pauses], np.r_[pauses, x.size])]
+        return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
+    # a dropped row is a gap of two or more sample intervals: the clock counts the intervals
+    # (jittered stamps round to one each, so an unbroken log stays as it was read, by row), the
+    # gaps are bridged by the angle interpolated on it, and the derivatives are read back at
+    # each row's count; intervals that are no whole number of the typical one (a log thinned
+    # after rows were dropped: 1.5 of them) are read in time, on an even clock of that interval
+    # (docs/measurements.md, "Checks before any fit")
+    ratio = np.diff(t) / dt
+    steps = np.maximum(np.rint(ratio), 1.0)
+    if np.all(np.abs(ratio - steps) < WHOLE_INTERVAL):
+        count = np.r_[0.0, np.cumsum(steps)]
+    else:
+        count = (t - t[0]) / dt
+    clock = np.arange(math.floor(count[-1]) + 1.0)
+    gaps = clock.size != x.size
+    xs = np.interp(clock, count, x) if gaps else x
     fs = 1.0 / dt
-    w1 = min(max(2 * int(0.5 * window_s * fs) + 1, 7), _odd_below(x.size))
-    w2 = min(max(2 * int(window_s * fs) + 1, 11), _odd_below(x.size))
-    speed = savgol_filter(x, w1, 3, deriv=1, delta=dt, mode="interp")
-    accel = savgol_filter(x, w2, 3, deriv=2, delta=dt, mode="interp")
+    w1 = min(max(2 * int(0.5 * window_s * fs) + 1, 7), _odd_below(xs.size))
+    w2 = min(max(2 * int(window_s * fs) + 1, 11), _odd_below(xs.size))
+    speed = savgol_filter(xs, w1, 3, deriv=1, delta=dt, mode="interp")
+    accel = savgol_filter(xs, w2, 3, deriv=2, delta=dt, mode="interp")
+    if gaps:
+        speed, accel = np.interp(count, clock, speed), np.interp(count, clock, accel)
     return speed, accel
 
 
