@@ -22,7 +22,7 @@ from hdsim.io.measurement import load_measurement, make_measurement, save_measur
 from hdsim.io.running_checks import sweep_kinematics
 from hdsim.model.catalog import load_unit
 from hdsim.model.input_friction import InputFriction, for_unit
-from hdsim.model.running_terms import parse_running_effects
+from hdsim.model.running_terms import parse_running_effects, parse_running_forms
 
 RATIO = 100.0
 
@@ -224,6 +224,22 @@ def test_effects_of_the_elastic_path_are_refused_for_a_sweep():
     assert parse_running_effects("stribeck,ripple") == ["friction", "ripple"]
     with pytest.raises(InputError, match="elastic path"):
         parse_running_effects("hardening")
+
+
+def test_a_ripple_form_named_with_its_family_is_the_form_fitted():
+    # {"ripple": "position_torque"} and "ripple=position_torque" had fitted the default ripple form
+    assert parse_running_forms({"ripple": "position_torque"}) == {"ripple": "position_torque"}
+    assert parse_running_forms("friction,ripple=position_torque") == {"friction": "stribeck",
+                                                                      "ripple": "position_torque"}
+    with pytest.raises(InputError, match="unknown ripple form 'positon_torque'; did you mean position_torque"):
+        parse_running_forms("ripple=positon_torque")
+    with pytest.raises(InputError, match="two ripple forms"):
+        parse_running_forms("ripple,position_torque")
+
+
+def test_a_misspelt_ripple_form_is_named_in_the_sweeps_words(cli, tmp_path):
+    code, _, stderr = cli("fit", "missing.csv", "--effects", "ripple=positon_torque", cwd=tmp_path)
+    assert code == 2 and "did you mean position_torque" in stderr
 
 
 def test_diagnosis_adds_what_the_law_made_and_nothing_more():

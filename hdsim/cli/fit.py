@@ -47,10 +47,12 @@ def load_inputs(args):
     """(measurement, effects) with every input checked before anything runs."""
     from hdsim.cli._import_arguments import cli_words, import_options
     from hdsim.errors import InputError
-    from hdsim.identification import workflow  # noqa: F401  (registers the built-in test kinds)
+    from hdsim.identification import workflow  # registers the built-in test kinds
     from hdsim.identification.test_kinds import test_kind, test_kinds
     from hdsim.io.measurement import load_measurement, parse_column_map
     from hdsim.model.catalog import load_unit
+
+    del workflow  # imported for the kinds it registers, not used by name
 
     columns = parse_column_map(args.columns) if args.columns else None
     # a misspelt family: one line, exit 2, before reading anything big. With --test the kind
@@ -62,9 +64,10 @@ def load_inputs(args):
             kind.parse_effects(args.effects)
             break
         except InputError as error:
-            errors.append(error)
-    else:
-        raise errors[-1]
+            errors.append((kind, error))
+    else:  # the words of a kind that knows the family named ('ripple=positon_torque': the sweep's)
+        named = {part.partition("=")[0].strip() for part in str(args.effects).split(",")}
+        raise next((e for k, e in errors if named & set(k.families())), errors[-1][1])
     try:  # the library names its keywords (drop_nan=True); the command line says its flags
         options = import_options(args)
         load_unit(args.unit)  # unknown unit: one line, exit 2, before reading anything big

@@ -390,21 +390,26 @@ def parse_running_effects(text) -> list[str]:
 
 
 def parse_running_forms(text) -> dict[str, str]:
-    """``'friction,position_torque'`` -> family -> term id, in the given order: a family name
-    stands for its default form, a term id (``position_torque``) for that form.
+    """``'friction,position_torque'``, ``'ripple=position_torque'`` or ``{'ripple': 'position_torque'}``
+    -> family -> term id, in the given order: a family name stands for its default form, a term
+    id or ``family=id`` for that form (as `hdsim.identification.fit.parse_effects` reads the
+    elastic path's effects).
 
     Raises
     ------
     InputError
-        On a name that is neither a running-torque family nor a term id.
+        On a name that is neither a running-torque family nor a term id, a form that is not
+        its family's, or two forms of one family; with close matches.
     """
     if text is None:
         return {}
-    items = text if isinstance(text, (list, tuple, set, dict)) else str(text).split(",")
+    if isinstance(text, dict):  # {family: term id}, checked as 'family=id' is
+        text = [family if form is None else f"{family}={form}" for family, form in text.items()]
+    items = text if isinstance(text, (list, tuple, set)) else str(text).split(",")
     by_id = {term.id: family for family, forms in RUNNING_FORMS.items() for term in forms}
     out: dict[str, str] = {}
     for raw in items:
-        item = str(raw).strip().partition("=")[0].strip()
+        item, sep, form = (part.strip() for part in str(raw).strip().partition("="))
         if not item or item == "none":
             continue
         family = item if item in RUNNING_FAMILIES else by_id.get(item)
@@ -412,6 +417,18 @@ def parse_running_forms(text) -> dict[str, str]:
             if item in ("hardening", "backlash", "kinematic_error"):
                 raise InputError(f"the {item} family acts in the elastic path and is not part of a running-torque "
                                  f"test; its families are {', '.join(RUNNING_FAMILIES)}")
-            raise unknown_name("running-torque family or effect", item, [*RUNNING_FAMILIES, *by_id])
-        out.setdefault(family, RUNNING_FAMILIES[family].id if item == family else item)
+            raise unknown_name("running-torque family or effect", item, {*RUNNING_FAMILIES, *by_id})
+        if sep:
+            if item != family:
+                raise unknown_name("running-torque family", item, RUNNING_FAMILIES)
+            if form == "none":
+                continue
+            forms = [term.id for term in RUNNING_FORMS[family]]
+            if form not in forms:
+                raise unknown_name(f"{family} form", form, forms)
+        else:
+            form = RUNNING_FAMILIES[family].id if item == family else item
+        if out.get(family, form) != form:
+            raise InputError(f"the effects name two {family} forms, {out[family]} and {form}; give one per family")
+        out[family] = form
     return out
