@@ -13,6 +13,8 @@ import math
 import numpy as np
 import pytest
 
+import hdsim
+
 from hdsim.errors import InputError
 from hdsim.identification.running_diagnosis import diagnose_running
 from hdsim.identification.running_fit import fit_running
@@ -27,11 +29,11 @@ from hdsim.model.running_terms import parse_running_effects, parse_running_forms
 RATIO = 100.0
 
 
-def sweep_profile(speeds=(3.0, 30.0, 150.0), fs=1000.0, dwell_turns=3.0, ramp=0.1):
+def sweep_profile(speeds=(3.0, 30.0, 150.0), fs=1000.0, dwell_turns=3.0, ramp=0.1, signs=(1.0, -1.0)):
     """Time, WG angle, speed and acceleration of a sweep: each speed forward and back, linear ramps."""
     knots_t, knots_w = [0.0], [0.0]
     for w in speeds:
-        for sign in (1.0, -1.0):
+        for sign in signs:
             cruise = dwell_turns * 2 * math.pi / w
             t = knots_t[-1]
             knots_t += [t + ramp, t + ramp + cruise, t + 2 * ramp + cruise]
@@ -431,3 +433,16 @@ def test_a_diagnosis_tells_the_ripple_forms_apart_with_both_directions():
     assert chosen.effect == "position_torque"
     modulated = diagnose_running(law_record(FULL, noise=5e-4), ["friction", "damping"])
     assert next(c for c in modulated.steps[0].candidates if c.family == "ripple").effect == "ripple"
+    assert not [a for a in result.ambiguous + modulated.ambiguous if a["families"] == ["ripple", "ripple"]]
+
+
+def test_a_sweep_in_one_direction_says_it_cannot_tell_the_ripple_forms_apart():
+    # it had added the modulated form silently: 'ambiguous' empty and no next measurement
+    law = FULL.with_updates(ripple_orders=(), ripple_amplitudes=(), ripple_phases=(), position_orders=(2.0,),
+                            position_amplitudes=(0.008,), position_phases=(0.4,))
+    result = hdsim.diagnose(law_record(law, noise=5e-4, signs=(1.0,)), effects=["friction", "damping"])
+    assert result.added == ["ripple"]
+    entry = next(a for a in result.to_json()["ambiguous"] if a["families"] == ["ripple", "ripple"])
+    assert entry["other_form"] == {"ripple": "position_torque"} and "other direction" in entry["measurement"]
+    assert entry["scores"][1] == pytest.approx(entry["scores"][0], abs=1.0)  # the same torque one way
+    assert "other direction" in result.next_measurement and "position torque" in result.next_measurement

@@ -103,7 +103,11 @@ class RunningTorqueTest(TestKind):
                  max_steps=None, log=None):
         if families is not None:  # the kind's names (a form's id names its family)
             families = list(self.baseline_effects(families))
-        return super().diagnose(meas, effects, unit=unit, families=families, max_rounds=max_rounds, log=log)
+        diagnosis = super().diagnose(meas, effects, unit=unit, families=families, max_rounds=max_rounds, log=log)
+        entry = one_way_ripple(diagnosis)
+        if entry is not None and self.keeps_entry(entry, diagnosis.ambiguous):
+            diagnosis.ambiguous.append(entry)
+        return diagnosis
 
     def fit_errors(self, fit) -> dict:
         return {"rmse_Nm": fit.rmse_Nm}
@@ -354,6 +358,41 @@ def _gains(held, before) -> list[float]:
     if held is None or before is None:
         return []
     return [1.0 - h / b if b > 0 else 0.0 for h, b in zip(held, before)]
+
+
+#: what tells the ripple's two forms apart (docs/physics.md, "Running torque")
+RIPPLE_FORMS_SEPARATED_BY = ("the same sweep in the other direction: in one direction a ripple that reverses "
+                             "with the motion (the friction level modulated with angle) and a position torque "
+                             "that does not (a motor's cogging, an unbalance, gravity on the output) are the "
+                             "same torque")
+
+
+def one_way_ripple(diagnosis) -> dict | None:
+    """The ``ambiguous`` entry of a ripple in the final model of a sweep in one direction, else
+    None: there its forms are the same torque (`RunningSession.entry_forms` enters the default
+    one), so the form in the model is named beside the other, as a form that ties with an
+    addition is (`hdsim.identification.policy.decide_round`), with the sweep both ways that
+    separates them. Scores: the ripple's when it was added, and the other form's against the
+    same model (None when the ripple was in the baseline)."""
+    fit = diagnosis.final.fit
+    form = (getattr(fit, "forms", None) or {}).get("ripple")  # a breakaway's law has no ripple
+    if form is None or len({np.sign(seg.speed) for seg in fit.record.segments}) > 1:
+        return None
+    other = next((term.id for term in RUNNING_FORMS["ripple"] if term.id != form), None)
+    if other is None:
+        return None
+    k = next((i for i, step in enumerate(diagnosis.steps) if step.added == "ripple"), None)
+    scores = [None, None]
+    if k is not None:
+        step = diagnosis.steps[k]
+        chosen = next(c for c in step.candidates if c.family == "ripple")
+        try:
+            rival = fit_running(fit.record, [*step.fit.forms.values(), other], unit=fit.unit)
+            scores = [chosen.score, float(rival.bic(chosen.n_eff) - step.fit.bic(chosen.n_eff))]
+        except InputError:
+            scores = [chosen.score, None]
+    return {"families": ["ripple", "ripple"], "scores": scores, "round": 0 if k is None else k + 1,
+            "measurement": RIPPLE_FORMS_SEPARATED_BY, "added": True, "other_form": {"ripple": other}}
 
 
 def diagnose_running(meas: Measurement | SweepRecord, effects=None, *, families=None,
