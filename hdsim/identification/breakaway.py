@@ -327,6 +327,9 @@ class BreakawayTest(RunningTorqueTest):
     def fit_json(self, fit) -> dict:
         return {"fitted": fit.fitted, "uncertainty": fit.uncertainty}
 
+    def prepare(self, meas):
+        return breakaway_torque_sign(meas)
+
     def checks(self, meas, scale):
         return breakaway_checks(meas, scale)
 
@@ -360,6 +363,29 @@ class BreakawayTest(RunningTorqueTest):
 
     def fit_sections(self, result, summary):
         return _starting_torque_section(summary["metrics"])
+
+
+def breakaway_torque_sign(meas):
+    """The ramp with its torque in the contract's sign (the torque before a start has the sign of
+    the motion that follows), and the check that says whether it was turned: with the other shaft
+    free nothing but the torque applied starts the shaft, so a torque against the start on
+    three quarters of the starts or more was logged with the other sign, and is negated (as a
+    twist test's is, `hdsim.io.data_checks.torque_sign_convention`)."""
+    torque = np.asarray(meas.torque, dtype=float)
+    if meas.wg_angle is None or torque.size < 10 or np.ptp(torque) == 0.0:
+        return meas, []
+    side = float(meas.ratio) if meas.torque_side == "output" and meas.ratio is not None else 1.0
+    starts = breakaway_episodes(meas.time, meas.wg_angle, torque / side)
+    against = [s for s in starts if np.sign(s.torque) == -s.direction]
+    if not starts or len(against) < 0.75 * len(starts):
+        return meas, []
+    from dataclasses import replace
+
+    return replace(meas, torque=-torque), [Check(
+        "torque_sign", "warn", f"the torque before {len(against)} of {len(starts)} starts is against the motion "
+        "that follows, which nothing but the torque applied can start: it was logged with the other sign (the "
+        "torque the drive delivers back, or a sensor or current of the other sense); it is negated for the "
+        "checks and fits")]
 
 
 def _starting_torque_section(metrics: dict) -> list:

@@ -132,6 +132,11 @@ class RunningTorqueTest(TestKind):
     def residual_whiteness(self, fit) -> dict:
         return _explained(fit, abs(fit.record.side_factor) * fit.record.noise_floor)  # `RunningSession.floor`
 
+    def prepare(self, meas):
+        from hdsim.io.running_checks import sweep_torque_sign
+
+        return sweep_torque_sign(meas)
+
     def checks(self, meas, scale):
         # imported here: running_checks loads scipy.signal (about a second)
         from hdsim.io.running_checks import running_checks

@@ -33,7 +33,8 @@ from hdsim.signals import breakaway_episodes, noise_level
 
 __all__ = ["Segment", "shaft_sign", "speed_and_acceleration", "sweep_kinematics", "settled_span",
            "constant_speed_segments", "distinct_speeds",
-           "running_checks", "turn_speed", "whole_turns", "turn_mean", "running_levels", "PLATEAU_TOLERANCE"]
+           "running_checks", "sweep_torque_sign", "turn_speed", "whole_turns", "turn_mean", "running_levels",
+           "PLATEAU_TOLERANCE"]
 
 #: a plateau: the speed stays within this fraction of its running mean
 PLATEAU_TOLERANCE = 0.05
@@ -56,6 +57,8 @@ BREAKAWAY_RISE_S = 0.5
 TEMPERATURE_SPAN = 10.0
 #: torque noise over the running level above which the record says little
 NOISE_SHARE = 0.5
+#: a torque against the motion on this share of the plateaus or more was logged with the other sign
+SIGN_SHARE = 0.75
 RPM_PER_RAD_S = 30.0 / math.pi
 #: a gap in the time stamps up to this many sample intervals is bridged by interpolation
 #: when differentiating the angle (dropped rows); a longer one is a pause that splits the record
@@ -347,6 +350,57 @@ def distinct_speeds(segments) -> list[float]:
         if not out or v > SPEED_STEP * out[-1]:
             out.append(v)
     return out
+
+
+def sweep_torque_sign(meas):
+    """The sweep with its torque in the contract's sign (the torque needed to turn the drive has
+    the sign of the motion), and the check that says whether it was turned.
+
+    The friction of a free or evenly loaded drive opposes its motion, so the torque that turns
+    it has the motion's sign. A median plateau torque against the motion on `SIGN_SHARE` of the
+    plateaus or more was logged with the other sign (the torque the drive delivers back, a
+    sensor mounted the other way, a motor current of the other sense), and is negated when that
+    reading is the only one: with both directions (the torque reverses with the motion, always
+    against it: no load does that), or in one direction when its magnitude grows from the
+    slowest plateau to the fastest (a loss grows with speed; a load that drove the shaft would
+    leave less torque at speed). In one direction at one speed a torque against the motion may
+    be either: the record is refused (`InputError`). Else the record is returned as it is, and
+    ``torque_opposes_motion`` of `running_checks` says what it sees.
+    """
+    torque = np.asarray(meas.torque, dtype=float)
+    if meas.wg_angle is None or torque.size < 10 or np.ptp(torque) == 0.0:
+        return meas, []
+    _, _, segments = sweep_kinematics(meas.time, meas.wg_angle)
+    if not segments:
+        return meas, []
+    shaft = shaft_sign(meas)
+    levels = np.array([shaft * float(np.median(torque[s.start:s.stop])) for s in segments])
+    speeds = np.array([s.speed for s in segments])
+    against = np.sign(levels) == -np.sign(speeds)
+    if np.mean(against) < SIGN_SHARE:
+        return meas, []
+    told = f"the torque is against the motion on {int(against.sum())} of {len(segments)} plateaus"
+    if len(set(np.sign(speeds).tolist())) > 1:
+        why = "it reverses with the direction, always against it"
+    elif len(distinct_speeds(segments)) > 1:
+        slow, fast = np.argmin(np.abs(speeds)), np.argmax(np.abs(speeds))
+        if abs(levels[fast]) <= abs(levels[slow]):
+            return meas, []  # a load that drives the shaft, less of it left at speed: `torque_opposes_motion` says
+        why = (f"one direction, and its magnitude grows with speed ({abs(levels[slow]):.3g} N·m at "
+               f"{abs(speeds[slow]) * RPM_PER_RAD_S:.3g} rpm, {abs(levels[fast]):.3g} N·m at "
+               f"{abs(speeds[fast]) * RPM_PER_RAD_S:.3g} rpm) as a loss does")
+    else:
+        from hdsim.errors import InputError
+
+        raise InputError(f"{meas.source or 'the record'}: {told}, in one direction at one speed: either the "
+                         "torque was logged with the other sign or a load drove the shaft, and this sweep cannot "
+                         "tell which; record a second speed or the other direction, or negate the torque "
+                         "(--columns torque_Nm=-1*COLUMN) if its sign is the other way")
+    from dataclasses import replace
+
+    return replace(meas, torque=-torque), [Check(
+        "torque_sign", "warn", f"{told} ({why}): the torque was logged with the other sign (the torque the "
+        "drive delivers back, or a sensor or current of the other sense); it is negated for the checks and fits")]
 
 
 def running_checks(meas, drive) -> tuple[list, dict]:
