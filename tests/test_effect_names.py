@@ -70,3 +70,21 @@ def test_two_effects_of_one_family_are_refused_in_python_words(stiffness, cli, t
             hdsim.fit(stiffness, effects)
     code, _, err = cli("fit", EXAMPLE, "--effects", "dahl,maxwell_slip", cwd=tmp_path)
     assert code == 2 and "name two friction effects, dahl and maxwell_slip" in err and "Traceback" not in err
+
+
+def test_diagnose_reads_a_dicts_forms_and_a_families_effect_ids_as_fit_does(stiffness, monkeypatch):
+    """A dict's form reached hdsim.diagnose unparsed ({"friction": None} was a raw TypeError,
+    {"friction": "none"} a baseline friction, "dhal" refused only after the record was
+    examined); `families` took an effect id ("dahl") as a family of another test."""
+    from hdsim.identification import workflow
+
+    def examined(*args, **kwargs):
+        raise AssertionError("the record was examined before the effects were checked")
+
+    with monkeypatch.context() as patch:
+        patch.setattr(workflow, "prepare_record", examined)
+        with pytest.raises(InputError, match="unknown friction effect 'dhal'; did you mean dahl"):
+            hdsim.diagnose(stiffness, {"friction": "dhal"})
+    d = hdsim.diagnose(stiffness, {"friction": "none"}, max_rounds=1)
+    assert d.to_json()["baseline"]["effects"] == []
+    assert hdsim.diagnose(stiffness, families=["dahl"], max_rounds=1).to_json()["ranking"][0]["family"] == "friction"

@@ -169,7 +169,7 @@ class TwistTest(TestKind):
         return [f for f in SLOTS if f in current]
 
     def parse_effects(self, effects):
-        return effects if isinstance(effects, dict) else parse_effects(effects)
+        return parse_effects(effects)  # a dict too: its forms are checked as a text's are
 
     def fit(self, meas, effects=None, *, unit=None):
         return fit(meas, effects, unit=unit)

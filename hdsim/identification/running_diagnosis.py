@@ -101,8 +101,6 @@ class RunningTorqueTest(TestKind):
 
     def diagnose(self, meas, effects=None, *, unit=None, families=None, candidates=None, max_rounds=None,
                  max_steps=None, log=None):
-        if families is not None:  # the kind's names (a form's id names its family)
-            families = list(self.baseline_effects(families))
         diagnosis = super().diagnose(meas, effects, unit=unit, families=families, max_rounds=max_rounds, log=log)
         entry = one_way_ripple(diagnosis)
         if entry is not None and self.keeps_entry(entry, diagnosis.ambiguous):

@@ -128,8 +128,9 @@ def _twist(model: HarmonicDrive, t: np.ndarray, torque: np.ndarray, slow: np.nda
     batch that shares its torque history, else one per parameter set.
 
     The path is solved on `step_grid` of the slow torque (the load and the commanded
-    inertia); between its steps the body twist is interpolated and the kinematic error's
-    inertial ripple adds its elastic twist on the base stiffness (``J ë / K``, ~1e-8 rad).
+    inertia); between its steps `locked_twist` moves the interpolated body twist by each
+    sample's own torque, so the kinematic error's inertial ripple adds its elastic twist
+    there (``J ë / K``, ~1e-8 rad) through the branch's compliance.
     """
     M = model.batch_size
     torque = np.broadcast_to(torque, (t.size, M))
@@ -144,10 +145,7 @@ def _twist(model: HarmonicDrive, t: np.ndarray, torque: np.ndarray, slow: np.nda
                  for m in range(M)]
         twist = np.concatenate([p[0] for p in parts])
         states = np.concatenate([np.atleast_2d(p[1]) if np.ndim(p[1]) == 2 else p[1] for p in parts], axis=-2)
-    # the torque the steps saw, interpolated between them: once for a shared history
-    stepped = np.array([np.interp(t, t[grid], torque[grid, m]) for m in range(1 if shared else M)])
-    ripple = (torque.T - stepped) / np.atleast_1d(np.asarray(model.base_stiffness, dtype=float))[:, None]
-    return twist + ripple, states
+    return twist, states
 
 
 def driven_signals(model: HarmonicDrive, bench: Bench, t: np.ndarray) -> dict:

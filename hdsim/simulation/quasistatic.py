@@ -459,10 +459,11 @@ def _between_steps(t, tg, e_grid, T, idx, k0):
 
 def branch_compliance(e_grid, Tg, k0):
     """(M, steps − 1) compliance [rad/(N·m)] of each interval between two steps: the secant
-    of the body twist over the torque, held between 0 and the base compliance ``1/k0``
-    (every law of the library is at least as stiff as its base along a branch; a secant
-    outside that range is a reversal's or a slip's, and a small torque step makes it
-    noise), and ``1/k0`` where the torque hardly changes between the steps."""
+    of the body twist over the torque, held between 0 and the base compliance ``1/k0``,
+    and ``1/k0`` where the torque hardly changes between the steps. A sample's departure
+    from the interpolated torque is small and reverses quickly (noise, a ripple), so a
+    slipping friction law sees it elastically, at no more than the base compliance; a
+    negative secant is a reversal's, and a small torque step makes the secant noise."""
     dT = np.diff(Tg)
     base = 1.0 / np.asarray(k0, dtype=float)[:, None]
     steps = np.abs(dT) > _step_floor(Tg)

@@ -153,7 +153,7 @@ def _output(left, weight, E, T, Tg, step_floor, k0, gap_twist, PB):
             c = compliance
             if abs(dT) > step_floor:
                 c = min(max(de / dT, 0.0), compliance)
-            departure = T[n] - (Tg[g] + dT * weight[n])
+            departure = (T[n] - Tg[g]) - dT * weight[n]  # exactly 0 on a step (weight 0 or 1)
             out[i, n] = E[i, g] + de * weight[n] + departure * c + gap_twist(T[n] * compliance, PB[i])
     return out
 
