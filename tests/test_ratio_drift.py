@@ -38,3 +38,18 @@ def test_a_genuine_record_passes(turns):
 def test_a_ratio_a_little_off_is_named(ratio):
     _, _, wrong = examine(_record(ratio), DRIVE)
     assert f"the slope says 100, the file says {ratio:g}" in wrong
+
+
+@pytest.mark.parametrize("ratio, wrong_test", [(100.0, False), (101.0, True)])
+def test_a_load_that_ramps_with_the_angle_leaves_the_slope_to_the_angle(ratio, wrong_test):
+    """A load growing with the output angle (0 → 40 N·m over the pass, a quiet sensor) is
+    collinear with it: fitted beside it, the torque's column took up the slope, and a
+    genuine record was called a wrong ratio (slope 0.976, 8.5°)."""
+    t = np.linspace(0.0, 20.0, 4000)
+    out_nominal = 2 * np.pi * t / t[-1]
+    torque = 40.0 * t / t[-1]
+    angle = out_nominal + torque / 31_000 + 2e-5 * np.sin(200 * out_nominal)
+    angle = angle + np.random.default_rng(1).normal(0.0, 1e-6, t.size)
+    record = make_measurement("kinematic_error", t, torque, angle, 100.0 * out_nominal, ratio=ratio)
+    _, _, wrong = examine(record, DRIVE)
+    assert bool(wrong) == wrong_test, wrong

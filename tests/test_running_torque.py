@@ -446,3 +446,13 @@ def test_a_sweep_in_one_direction_says_it_cannot_tell_the_ripple_forms_apart():
     assert entry["other_form"] == {"ripple": "position_torque"} and "other direction" in entry["measurement"]
     assert entry["scores"][1] == pytest.approx(entry["scores"][0], abs=1.0)  # the same torque one way
     assert "other direction" in result.next_measurement and "position torque" in result.next_measurement
+
+
+def test_a_ripple_given_in_the_baseline_of_a_one_way_sweep_is_not_called_added():
+    # the entry had said "added" (and the page "ripple was added") of a ripple the user gave
+    law = FULL.with_updates(ripple_orders=(), ripple_amplitudes=(), ripple_phases=(), position_orders=(2.0,),
+                            position_amplitudes=(0.008,), position_phases=(0.4,))
+    result = hdsim.diagnose(law_record(law, noise=5e-4, signs=(1.0,)), effects=["friction", "damping", "ripple"])
+    entry = next(a for a in result.to_json()["ambiguous"] if a["families"] == ["ripple", "ripple"])
+    assert entry["added"] is False and entry["scores"] == [None, None]
+    assert "other direction" in result.next_measurement

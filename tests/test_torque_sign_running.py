@@ -59,3 +59,14 @@ def test_a_breakaway_logged_with_the_other_sign_gives_positive_starting_torques(
     metrics = fit(meas).metrics()
     for way in ("forward", "reverse"):
         assert metrics[f"starting_torque_{way}_Nm"] == pytest.approx(truth[f"starting_torque_{way}_Nm"], rel=0.1)
+
+
+def test_a_sweep_against_its_motion_one_way_only_carries_a_load_and_is_left_as_it_is():
+    """A load larger than the friction, the same way throughout, puts the torque against the
+    motion in one direction only; on a sweep with more plateaus that way it had made up the
+    share of plateaus against the motion and was negated as "always against it"."""
+    meas = law_record(LAW, speeds=(20.0, 60.0, 100.0), dwell_turns=4.0, signs=(1.0, 1.0, 1.0, -1.0))
+    loaded = make_measurement(meas.test, meas.time, np.asarray(meas.torque) - 0.2, None, wg_angle=meas.wg_angle,
+                              ratio=meas.ratio, meta={"torque_side": meas.torque_side})
+    turned, checks = sweep_torque_sign(loaded)
+    assert checks == [] and turned is loaded

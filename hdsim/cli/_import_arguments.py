@@ -53,7 +53,7 @@ def add_import_arguments(parser) -> None:
 _KEYWORDS = "test|ratio|rated_torque|meta|drop_nan|window|sample_rate|concatenated"
 _CLI_WORDS = (
     (re.compile(r"(?<![\w/.-])(drop_nan|concatenated)=True\b"), lambda m: _flag(m[1])),
-    (re.compile(r"(?<![\w/.-])columns=\{'(\w+)': (\w+)\}"), lambda m: f"--columns {m[1]}={m[2]}"),
+    (re.compile(r"(?<![\w/.-])columns=\{'(\w+)': '?([^'}]+?)'?\}"), lambda m: f"--columns {m[1]}={m[2]}"),
     (re.compile(r"(?<![\w/.-])(test|ratio|rated_torque|sample_rate)=(\w+)"), lambda m: f"{_flag(m[1])} {m[2]}"),
     (re.compile(rf"^({_KEYWORDS}): "), lambda m: f"{_flag(m[1])}: "),
 )

@@ -305,8 +305,9 @@ def _percent(fraction: float) -> str:
 def _ambiguity_text(a: dict) -> str:
     first, second = a["families"][:2]
     if a.get("other_form"):
+        held = "was added" if a.get("added") else "was in the baseline"
         return (f"{first}, and {second} as {a['other_form'][second]} instead, explain the residual about "
-                f"equally well; {first} was added; to separate them: {a['measurement']}")
+                f"equally well; {first} {held}; to separate them: {a['measurement']}")
     if a.get("added") is False:
         held = (f"{a['provisional']} stood in the model for the loss (not added) while the other families "
                 f"were tried against it; " if a.get("provisional") else "")

@@ -376,7 +376,8 @@ def one_way_ripple(diagnosis) -> dict | None:
     one), so the form in the model is named beside the other, as a form that ties with an
     addition is (`hdsim.identification.policy.decide_round`), with the sweep both ways that
     separates them. Scores: the ripple's when it was added, and the other form's against the
-    same model (None when the ripple was in the baseline)."""
+    same model; a ripple of the baseline was not added (``added`` False, scores None), and
+    the form it was given stays open as a pair the record cannot tell apart."""
     fit = diagnosis.final.fit
     form = (getattr(fit, "forms", None) or {}).get("ripple")  # a breakaway's law has no ripple
     if form is None or len({np.sign(seg.speed) for seg in fit.record.segments}) > 1:
@@ -395,7 +396,7 @@ def one_way_ripple(diagnosis) -> dict | None:
         except InputError:
             scores = [chosen.score, None]
     return {"families": ["ripple", "ripple"], "scores": scores, "round": 0 if k is None else k + 1,
-            "measurement": RIPPLE_FORMS_SEPARATED_BY, "added": True, "other_form": {"ripple": other}}
+            "measurement": RIPPLE_FORMS_SEPARATED_BY, "added": k is not None, "other_form": {"ripple": other}}
 
 
 def diagnose_running(meas: Measurement | SweepRecord, effects=None, *, families=None,

@@ -42,6 +42,9 @@ NOISE_WARN, NOISE_FAIL = 0.05, 0.3
 #: twist [rad]: catalog transmission accuracy is 1-1.5 arcmin, lost motion 1-3 (a worn or
 #: home-built drive several times that); `ratio_consistency`
 RATIO_DRIFT_ALLOWANCE = math.radians(10.0 / 60.0)
+#: a load whose correlation with the output angle is this or more follows the angle (a ramp,
+#: a spring): the ratio check fits no elastic twist of its own then
+RAMP_CORRELATION = 0.9
 #: identity checks: a fail means the record is not the test it claims
 IDENTITY = ("twist_span", "angle_follows_torque", "kinematic_error_not_zero", "ratio_consistent", "turns_steadily",
             "torque_varies", "holds_without_slipping", "broke_away")
@@ -404,7 +407,11 @@ def ratio_consistency(meas, status: str, drive: DriveScale | None = None) -> Che
     if not travel > 0:
         return None
     torque = np.asarray(meas.torque, dtype=float)
-    columns = [nominal, np.ones_like(nominal)] + ([torque] if np.ptp(torque) > 0 else [])  # the elastic twist
+    # the elastic twist, unless the load follows the angle (a ramp or a spring): the torque's
+    # column would then take up the slope, and the slope would say nothing; the allowance
+    # below holds that twist anyway
+    follows = np.ptp(torque) > 0 and abs(np.corrcoef(nominal, torque)[0, 1]) >= RAMP_CORRELATION
+    columns = [nominal, np.ones_like(nominal)] + ([torque] if np.ptp(torque) > 0 and not follows else [])
     slope = float(np.linalg.lstsq(np.column_stack(columns), out_angle, rcond=None)[0][0])
     drift = abs(slope - 1.0) * travel
     allowed = RATIO_DRIFT_ALLOWANCE + (float(np.ptp(torque)) / drive.K_soft if drive else 0.0)

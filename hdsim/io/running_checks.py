@@ -381,6 +381,8 @@ def sweep_torque_sign(meas):
         return meas, []
     told = f"the torque is against the motion on {int(against.sum())} of {len(segments)} plateaus"
     if len(set(np.sign(speeds).tolist())) > 1:
+        if not all(np.mean(against[np.sign(speeds) == way]) >= SIGN_SHARE for way in (1.0, -1.0)):
+            return meas, []  # against one way only: a load larger than the friction; `torque_opposes_motion` says
         why = "it reverses with the direction, always against it"
     elif len(distinct_speeds(segments)) > 1:
         slow, fast = np.argmin(np.abs(speeds)), np.argmax(np.abs(speeds))
@@ -395,7 +397,7 @@ def sweep_torque_sign(meas):
         raise InputError(f"{meas.source or 'the record'}: {told}, in one direction at one speed: either the "
                          "torque was logged with the other sign or a load drove the shaft, and this sweep cannot "
                          "tell which; record a second speed or the other direction, or negate the torque "
-                         "(--columns torque_Nm=-1*COLUMN) if its sign is the other way")
+                         "(columns={'torque_Nm': '-1*COLUMN'}) if its sign is the other way")
     from dataclasses import replace
 
     return replace(meas, torque=-torque), [Check(

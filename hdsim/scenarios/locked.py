@@ -188,13 +188,12 @@ def slow_run_reason(model: HarmonicDrive) -> str | None:
     mode = sticking_mode(model)
     if mode["sticking_ratio"] <= SLOW_STICKING_RATIO or mode["damping_ratio"] >= SLOW_DAMPING_RATIO:
         return None
-    return (f"solve_ivp will take minutes on this drive: its friction sticks at {mode['sticking_ratio']:.3g} times "
+    return (f"solve_ivp may take minutes on this drive: its friction sticks at {mode['sticking_ratio']:.3g} times "
             f"the spring's stiffness and the output rings on it at {mode['frequency_Hz'] / 1e3:.3g} kHz, damped at a "
             f"ratio of {mode['damping_ratio']:.2g}; at every torque reversal the solver follows that ringing step by "
             f"step (the model's physics: docs/sensitivity.md, 'Which evaluator'). Where the loop's metrics are "
-            f"what is needed, evaluator='quasistatic' gives them in a fraction of a second (the ±4 % lost motion "
-            f"within 1e-4; hysteresis, centre-line lost motion and K1 within ~2 %), and 'auto' takes it where "
-            f"that holds")
+            f"what is needed, evaluator='quasistatic' gives them in a fraction of a second, and 'auto' takes it "
+            f"where the docs' criterion says it agrees with solve_ivp")
 
 
 def run_locked(model: HarmonicDrive, scenario, *, samples_per_segment: int | None = None,

@@ -477,11 +477,17 @@ def _quasistatic_gap(model: HarmonicDrive, scenario: Scenario, output: str) -> f
     NaN-free: 0 when either evaluator cannot give the output, which the study's own rows
     then show.
     """
+    import warnings
+
+    from hdsim.scenarios.locked import SlowRunWarning
+
     values = []
     for evaluator in ("quasistatic", "dynamic"):
         try:
-            run = run_scenario(model, scenario, samples_per_segment=STUDY_SAMPLES.get(scenario.name),
-                               evaluator=evaluator)
+            with warnings.catch_warnings():  # a quasi-static study is the advice that warning gives
+                warnings.simplefilter("ignore", SlowRunWarning)
+                run = run_scenario(model, scenario, samples_per_segment=STUDY_SAMPLES.get(scenario.name),
+                                   evaluator=evaluator)
         except SolverError:
             return 0.0
         values.append(float(np.asarray(run.metrics.get(output, np.nan)).reshape(-1)[0]))
