@@ -39,3 +39,8 @@ def unknown_name(kind: str, name: str, known) -> InputError:
     close = difflib.get_close_matches(name, known, n=3, cutoff=0.5)
     hint = f"; did you mean {', '.join(close)}?" if close else f"; known: {', '.join(known)}"
     return InputError(f"unknown {kind} '{name}'{hint}")
+
+
+class SlowRunWarning(UserWarning):
+    """A dynamic run of the locked bench that will take long, and why
+    (`hdsim.scenarios.locked.slow_run_reason`)."""

@@ -17,7 +17,8 @@ import pytest
 from hdsim.model.catalog import load_unit
 from hdsim.model.effects import DahlFriction, NoDamping, ViscousDamping
 from hdsim.scenarios import locked
-from hdsim.scenarios.locked import SlowRunWarning, slow_run_reason, sticking_mode
+from hdsim.errors import SlowRunWarning
+from hdsim.scenarios.locked import slow_run_reason, sticking_mode
 from hdsim.scenarios.run import run_scenario
 
 
@@ -59,3 +60,16 @@ def test_damping_or_a_softer_sticking_makes_no_slow_run(sticking):
     assert sticking_mode(damped)["damping_ratio"] > 1e-4 and slow_run_reason(damped) is None
     # 250 times the spring, undamped: 20,000 evaluations a cycle
     assert slow_run_reason(sticking.with_updates({"friction.sigma": 250 * float(sticking.base_stiffness)})) is None
+
+
+def test_the_command_says_it_on_a_line_of_its_own_in_its_own_words(capsys):
+    """On the command line the warning was Python's ("path.py:45: SlowRunWarning: …
+    evaluator='quasistatic'"); it is a ``warn:`` line naming the command's option."""
+    from hdsim.cli import hide_library_warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        hide_library_warnings("simulate")
+        warnings.warn("slow here; evaluator='quasistatic' is fast, and 'auto' takes it", SlowRunWarning)
+    err = capsys.readouterr().err
+    assert err == "hdsim simulate: warn: slow here; --evaluator quasistatic is fast, and --evaluator auto takes it\n"

@@ -17,7 +17,7 @@ import re
 import sys
 import warnings
 
-from hdsim.errors import InputError, SolverError
+from hdsim.errors import InputError, SlowRunWarning, SolverError
 
 VERBS = ("demo", "units", "simulate", "compliance", "sobol", "fit", "diagnose")
 
@@ -107,7 +107,7 @@ def main(argv=None) -> int:
     debug = debug or os.environ.get("HDSIM_DEBUG", "") not in ("", "0")
     with warnings.catch_warnings():
         if not debug:
-            hide_library_warnings()
+            hide_library_warnings(args.verb)
         return _dispatch(args, debug)
 
 
@@ -146,7 +146,11 @@ _LIBRARIES = frozenset({"numpy", "scipy", "SALib", "h5py", "matplotlib", "numba"
                         "distributed", "skfem", "tomli_w"})
 
 
-def hide_library_warnings() -> None:
+#: a library warning's advice in the Python API's words, and the same in the command's
+_OPTION_WORDS = (("evaluator='quasistatic'", "--evaluator quasistatic"), ("'auto'", "--evaluator auto"))
+
+
+def hide_library_warnings(verb: str | None = None) -> None:
     """Keep the numerical libraries' Python warnings off the user's stderr (``--debug`` shows them).
 
     A record with one absurd cell made numpy print a dozen lines of overflow warnings before
@@ -163,8 +167,15 @@ def hide_library_warnings() -> None:
     shown = warnings.showwarning
 
     def show_unless_library(message, category, filename, lineno, file=None, line=None):
-        if not _issued_by_library():
-            shown(message, category, filename, lineno, file, line)
+        if _issued_by_library():
+            return
+        if verb and issubclass(category, SlowRunWarning):  # hdsim's own advice: a line of the command's
+            text = str(message)
+            for python, option in _OPTION_WORDS:
+                text = text.replace(python, option)
+            print(f"hdsim {verb}: warn: {text}", file=sys.stderr)
+            return
+        shown(message, category, filename, lineno, file, line)
 
     warnings.showwarning = show_unless_library
 

@@ -12,7 +12,7 @@ import warnings
 
 import numpy as np
 
-from hdsim.errors import InputError
+from hdsim.errors import InputError, SlowRunWarning
 from hdsim.model.drive import HarmonicDrive
 from hdsim.scenarios.limits import refuse_if_too_large
 from hdsim.scenarios.locked_metrics import METRIC_GROUPS, locked_metrics
@@ -165,8 +165,6 @@ SLOW_STICKING_RATIO = 300.0
 SLOW_DAMPING_RATIO = 5e-5
 
 
-class SlowRunWarning(UserWarning):
-    """A dynamic run of the locked bench that will take long, and why."""
 
 
 def sticking_mode(model: HarmonicDrive) -> dict[str, float]:

@@ -479,7 +479,7 @@ def _quasistatic_gap(model: HarmonicDrive, scenario: Scenario, output: str) -> f
     """
     import warnings
 
-    from hdsim.scenarios.locked import SlowRunWarning
+    from hdsim.errors import SlowRunWarning
 
     values = []
     for evaluator in ("quasistatic", "dynamic"):
