@@ -153,7 +153,11 @@ def _output(left, weight, E, T, Tg, step_floor, k0, gap_twist, PB):
             c = compliance
             if abs(dT) > step_floor:
                 c = min(max(de / dT, 0.0), compliance)
-            departure = (T[n] - Tg[g]) - dT * weight[n]  # exactly 0 on a step (weight 0 or 1)
+            # T − (Tg + ΔT·w) may be an ulp from 0 on a step (w = 1), where numpy's interp is
+            # exact; written the other way round it is exact too, but that ulp flipped a
+            # borderline zoo decision (validation/README.md, stop 42), so the form of the
+            # frozen runs is kept
+            departure = T[n] - (Tg[g] + dT * weight[n])
             out[i, n] = E[i, g] + de * weight[n] + departure * c + gap_twist(T[n] * compliance, PB[i])
     return out
 
