@@ -366,7 +366,7 @@ class BreakawayTest(RunningTorqueTest):
 
 
 def breakaway_torque_sign(meas):
-    """The ramp with its torque in the contract's sign (the torque before a start has the sign of
+    """The ramp with its torque in the sign docs/measurements.md gives (the torque before a start has the sign of
     the motion that follows), and the check that says whether it was turned: with the other shaft
     free nothing but the torque applied starts the shaft, so a torque against the start on
     three quarters of the starts or more was logged with the other sign, and is negated (as a

@@ -353,7 +353,7 @@ def distinct_speeds(segments) -> list[float]:
 
 
 def sweep_torque_sign(meas):
-    """The sweep with its torque in the contract's sign (the torque needed to turn the drive has
+    """The sweep with its torque in the sign docs/measurements.md gives (the torque needed to turn the drive has
     the sign of the motion), and the check that says whether it was turned.
 
     The friction of a free or evenly loaded drive opposes its motion, so the torque that turns
