@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["Check"]
+__all__ = ["Check", "constant_torque"]
 
 
 @dataclass(frozen=True)
@@ -23,3 +23,10 @@ class Check:
 
     def to_json(self) -> dict:
         return {"check": self.check, "status": self.status, "message": self.message}
+
+
+def constant_torque(value: float) -> Check:
+    """The ``torque_varies`` failure of a record whose torque is ``value`` [N·m] on every row
+    (a locked test's, a sweep's, a breakaway's: each must vary its torque)."""
+    return Check("torque_varies", "fail", f"the torque is {float(value):.6g} N·m on every row: a channel that "
+                 "was not logged, or another column (a temperature?) mapped as the torque")

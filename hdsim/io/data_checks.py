@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hdsim.io.check import Check
+from hdsim.io.check import Check, constant_torque
 from hdsim.signals import breakaway_episodes, loading_rates, noise_level, rate_groups, torque_legs
 
 __all__ = ["DriveScale", "run_checks", "wrong_test", "import_checks", "slipping_starts", "twist_slope",
@@ -188,8 +188,7 @@ def run_checks(meas, drive: DriveScale) -> tuple[list[Check], dict]:
 
     constant = not ke and np.ptp(T) == 0.0  # a driven test may hold one load; a locked test must vary it
     if constant:
-        checks.append(Check("torque_varies", "fail", f"the torque is {float(T[0]):.6g} N·m on every row: a "
-                            "channel that was not logged, or another column (a temperature?) mapped as the torque"))
+        checks.append(constant_torque(T[0]))
     elif ke:
         checks += _kinematic_error_identity(meas, drive)
     else:

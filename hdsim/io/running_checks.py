@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hdsim.io.check import Check
+from hdsim.io.check import Check, constant_torque
 from hdsim.io.data_checks import ratio_consistency
 from hdsim.signals import breakaway_episodes, noise_level
 
@@ -425,8 +425,7 @@ def running_checks(meas, drive) -> tuple[list, dict]:
     noise = noise_level(torque, meas.time)
     data = {"noise_floor_Nm": noise, "torque_noise_Nm": noise, "plateaus": 0, "speeds_rpm": [], "reversals": 0}
     if np.ptp(torque) == 0.0:  # nothing to fit: a law of level 0 would leave no residual and no noise
-        return [Check("torque_varies", "fail", f"the torque is {float(torque[0]):.6g} N·m on every row: a "
-                      "channel that was not logged (or a placeholder), not a running torque")], data
+        return [constant_torque(torque[0])], data
     _, _, segments = sweep_kinematics(meas.time, meas.wg_angle)
     checks = []
     starts = breakaway_episodes(meas.time, meas.wg_angle, torque)
