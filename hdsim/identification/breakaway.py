@@ -41,7 +41,7 @@ from hdsim.identification.running_diagnosis import RunningSession, RunningTorque
 from hdsim.identification.running_fit import TorqueFit, bounded_lsq
 from hdsim.identification.test_kinds import TestKind, register_test_kind
 from hdsim.io.data_checks import Check, slipping_starts
-from hdsim.io.running_checks import speed_and_acceleration
+from hdsim.io.running_checks import SIGN_SHARE, side_factor, speed_and_acceleration
 from hdsim.model.family import FamilyKnowledge
 from hdsim.signals import breakaway_episodes, noise_level
 
@@ -93,7 +93,7 @@ class BreakawayRecord:
     def of(cls, meas) -> "BreakawayRecord":
         if isinstance(meas, cls):
             return meas
-        side = float(meas.ratio) if meas.torque_side == "output" else 1.0
+        side = side_factor(meas)
         t = np.asarray(meas.time, dtype=float)
         wg = np.asarray(meas.wg_angle, dtype=float)
         torque = np.asarray(meas.torque, dtype=float) / side
@@ -374,10 +374,9 @@ def breakaway_torque_sign(meas):
     torque = np.asarray(meas.torque, dtype=float)
     if meas.wg_angle is None or torque.size < 10 or np.ptp(torque) == 0.0:
         return meas, []
-    side = float(meas.ratio) if meas.torque_side == "output" and meas.ratio is not None else 1.0
-    starts = breakaway_episodes(meas.time, meas.wg_angle, torque / side)
+    starts = breakaway_episodes(meas.time, meas.wg_angle, torque / side_factor(meas))
     against = [s for s in starts if np.sign(s.torque) == -s.direction]
-    if not starts or len(against) < 0.75 * len(starts):
+    if not starts or len(against) < SIGN_SHARE * len(starts):
         return meas, []
     from dataclasses import replace
 

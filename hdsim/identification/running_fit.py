@@ -37,7 +37,7 @@ from hdsim.errors import InputError
 from hdsim.identification.optimizer import FittedRows, effective_n, inverse_gram, json_finite
 from hdsim.identification.sweep_nonlinear import nonlinear_columns, refine_nonlinear
 from hdsim.io.measurement import Measurement
-from hdsim.io.running_checks import Segment, running_levels, shaft_sign, sweep_kinematics
+from hdsim.io.running_checks import Segment, running_levels, shaft_sign, side_factor, sweep_kinematics
 from hdsim.model.input_friction import InputFriction
 from hdsim.model.running_terms import BASE_TERM, RUNNING_FAMILIES, PositionRipple, RunningTerm, running_term, unit_law
 from hdsim.signals import noise_level
@@ -119,8 +119,7 @@ class SweepRecord:
             return meas
         if meas.test != "running_torque":
             raise InputError(f"{meas.source}: a {meas.test} test is not a running-torque test")
-        ratio = float(meas.ratio) if meas.ratio is not None else 1.0
-        side = ratio if meas.torque_side == "output" else 1.0
+        side = side_factor(meas)
         speed, accel, segments = sweep_kinematics(meas.time, meas.wg_angle)
         if not segments:
             raise InputError(f"{meas.source}: the drive never turns at a steady speed; a running-torque test "

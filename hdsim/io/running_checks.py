@@ -314,6 +314,18 @@ def shaft_sign(meas) -> float:
     return -1.0 if negative else 1.0
 
 
+def side_factor(meas) -> float:
+    """File torque over WG-shaft torque: the ratio for a torque on the output, else 1."""
+    return float(meas.ratio) if meas.torque_side == "output" and meas.ratio is not None else 1.0
+
+
+def plateau_levels(meas, segments) -> np.ndarray:
+    """Each plateau's median torque [N·m, the file's shaft] with the sign of the WG's motion
+    (`shaft_sign`: the output turns against the WG for a negative ratio)."""
+    torque = np.asarray(meas.torque, dtype=float)
+    return shaft_sign(meas) * np.array([float(np.median(torque[s.start:s.stop])) for s in segments])
+
+
 def running_levels(torque, angle, segments) -> dict:
     """The running torque of each direction, model-free: the mean torque magnitude over the
     whole WG turns of its plateaus (`whole_turns`), per unit of angle (`turn_mean`) [unit of
@@ -373,8 +385,7 @@ def sweep_torque_sign(meas):
     _, _, segments = sweep_kinematics(meas.time, meas.wg_angle)
     if not segments:
         return meas, []
-    shaft = shaft_sign(meas)
-    levels = np.array([shaft * float(np.median(torque[s.start:s.stop])) for s in segments])
+    levels = plateau_levels(meas, segments)
     speeds = np.array([s.speed for s in segments])
     against = np.sign(levels) == -np.sign(speeds)
     if np.mean(against) < SIGN_SHARE:
@@ -446,12 +457,10 @@ def running_checks(meas, drive) -> tuple[list, dict]:
                          f"{', '.join(f'{v * RPM_PER_RAD_S:.3g}' for v in speeds)} rpm of the wave generator: "
                          f"{steady_rows} of {torque.size} rows; the rest (ramps, rests, idle legs) enter the "
                          "fit only where the drive moves"))
-    # the torque follows its own shaft's motion: the output turns against the WG for a negative ratio
-    shaft = shaft_sign(meas)
-    levels = [float(np.median(torque[s.start:s.stop])) for s in segments]
-    follows = [np.sign(level) == shaft * np.sign(s.speed) for level, s in zip(levels, segments)]
+    shaft, levels = shaft_sign(meas), plateau_levels(meas, segments)
+    follows = [np.sign(level) == np.sign(s.speed) for level, s in zip(levels, segments)]
     directions = {int(np.sign(s.speed)) for s in segments}
-    if np.mean(follows) < 0.75:
+    if np.mean(follows) < SIGN_SHARE:
         checks.append(Check("torque_opposes_motion", "warn", f"the torque has the sign of the motion on "
                              f"{sum(follows)} of {len(follows)} plateaus: an offset or a load larger than the "
                              "friction, or the torque's sign convention is the other way"))
