@@ -90,7 +90,7 @@ from hdsim.identification.folds import folds, one_loading_rate
 from hdsim.identification.optimizer import judge_nested
 from hdsim.identification.outcome import plausibility, twist_limits
 from hdsim.identification.problem import other_starts
-from hdsim.identification.residuals import findings, whiteness
+from hdsim.identification.residuals import findings
 from hdsim.identification.selection import TWIST_THRESHOLDS, score_candidate
 from hdsim.identification.test_kinds import TestKind, register_test_kind, test_kind
 from hdsim.io.data_checks import run_checks, torque_sign_convention
@@ -324,7 +324,7 @@ class TwistSession:
 
     def explained(self, step: Step) -> dict:
         if "whiteness" not in step.memo:
-            step.memo["whiteness"] = whiteness(step.fit.residual)
+            step.memo["whiteness"] = self.kind.residual_whiteness(step.fit)
         return step.memo["whiteness"]
 
     def confidence(self, steps: list) -> dict:

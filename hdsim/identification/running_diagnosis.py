@@ -128,7 +128,7 @@ class RunningTorqueTest(TestKind):
                 "explains only in part")
 
     def residual_whiteness(self, fit) -> dict:
-        return _explained(fit, abs(fit.record.side_factor) * fit.record.noise_floor)  # `RunningSession.floor`
+        return _explained(fit, _floor(fit.record))
 
     def prepare(self, meas):
         from hdsim.io.running_checks import sweep_torque_sign
@@ -245,7 +245,7 @@ class RunningSession:
     @property
     def floor(self) -> float:
         """The record's model-free torque noise on the file's side [N·m]."""
-        return self.record.noise_floor * abs(self.record.side_factor)
+        return _floor(self.record)
 
     def baseline(self) -> Step:
         ids = list(self.chosen.values())
@@ -340,6 +340,11 @@ class RunningSession:
                 cand.accepted = True
                 cand.reason = f"removes {100 * share:.0f} % of the residual above the noise floor"
         return cand
+
+
+def _floor(record) -> float:
+    """A sweep's model-free torque noise on the file's side [N·m]: what its verdict is judged against."""
+    return record.noise_floor * abs(record.side_factor)
 
 
 def _explained(fit, floor: float) -> dict:
