@@ -340,13 +340,18 @@ def covariance(prob: FitProblem, r: np.ndarray) -> np.ndarray | None:
     by ``n / n_eff`` for a correlated residual; None without a Jacobian."""
     if prob.J is None:
         return None
-    n = r.size
-    J = np.hstack([prob.J, np.ones((n, 1))])
-    s2 = float(r @ r) / max(n - J.shape[1], 1)
     try:
-        return inverse_gram(J) * s2 * (n / effective_n(r))
+        return widened_inverse(np.hstack([prob.J, np.ones((r.size, 1))]), r)
     except np.linalg.LinAlgError:
         return None
+
+
+def widened_inverse(A: np.ndarray, r: np.ndarray, extra_dof: int = 0) -> np.ndarray:
+    """``s² (AᵀA)⁻¹`` (`inverse_gram`) widened by ``n / n_eff`` for a correlated residual
+    ``r``, with ``s² = rᵀr / (n − columns − extra_dof)``: the covariance of every fit here."""
+    n = r.size
+    s2 = float(r @ r) / max(n - A.shape[1] - extra_dof, 1)
+    return inverse_gram(A) * s2 * (n / effective_n(r))
 
 
 def linear_covariance(prob: FitProblem, r: np.ndarray) -> np.ndarray:
@@ -354,10 +359,7 @@ def linear_covariance(prob: FitProblem, r: np.ndarray) -> np.ndarray:
     first, then the kinematic error's), ``s² (BᵀB)⁻¹`` on the fitted rows widened by
     ``n / n_eff`` as `covariance` is: conditional on the fitted coordinates, as the offset's
     own variance there is."""
-    B = prob.basis[prob.rows]
-    n = r.size
-    s2 = float(r @ r) / max(n - B.shape[1] - prob.u.size, 1)
-    return inverse_gram(B) * s2 * (n / effective_n(r))
+    return widened_inverse(prob.basis[prob.rows], r, prob.u.size)
 
 
 def uncertainty(prob: FitProblem, cov: np.ndarray | None) -> dict:

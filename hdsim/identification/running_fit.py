@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from hdsim.errors import InputError
-from hdsim.identification.optimizer import FittedRows, effective_n, inverse_gram, json_finite
+from hdsim.identification.optimizer import FittedRows, effective_n, json_finite, widened_inverse
 from hdsim.identification.sweep_nonlinear import nonlinear_columns, refine_nonlinear
 from hdsim.io.measurement import Measurement
 from hdsim.io.running_checks import Segment, running_levels, shaft_sign, side_factor, sweep_kinematics
@@ -561,10 +561,8 @@ def _check_law_holds(residual: np.ndarray, rss: float, y: np.ndarray) -> None:
 
 def _covariance(A, r) -> np.ndarray | None:
     """Covariance of the amplitudes, (AᵀA)⁻¹ s² widened by n/n_eff for a correlated residual."""
-    n, k = A.shape
-    s2 = float(r @ r) / max(n - k, 1)
     try:
-        return inverse_gram(A) * s2 * (n / effective_n(r))
+        return widened_inverse(A, r)
     except np.linalg.LinAlgError:
         return None
 

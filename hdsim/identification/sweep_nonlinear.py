@@ -56,14 +56,18 @@ def refine_nonlinear(solve, grids: dict, best: tuple) -> tuple:
         low, high = values[max(i - 1, 0)], values[min(i + 1, values.size - 1)]
         if high <= low:
             continue
-        fixed, solved = dict(best[1]), {}
+        fixed, kept = dict(best[1]), []
 
-        def cost(log_value, fixed=fixed, family=family, solved=solved):
-            solved[log_value] = solve({**fixed, family: math.exp(log_value)})  # the search's last is its answer
-            return solved[log_value][0]
+        def cost(log_value, fixed=fixed, family=family, kept=kept):
+            # only the best trial is kept (each holds its design matrix): the search's answer is
+            # the point where its best cost was last updated, so `<=` keeps that trial
+            trial = solve({**fixed, family: math.exp(log_value)})
+            if not kept or trial[0] <= kept[0][0]:
+                kept[:] = [trial]
+            return trial[0]
 
-        found = minimize_scalar(cost, bounds=(low, high), method="bounded", options={"xatol": REFINE_TOLERANCE})
-        trial = solved.get(found.x) or solve({**fixed, family: math.exp(float(found.x))})
+        minimize_scalar(cost, bounds=(low, high), method="bounded", options={"xatol": REFINE_TOLERANCE})
+        trial = kept[0]
         if trial[0] < best[0]:
             best = trial
     return best
