@@ -271,6 +271,7 @@ class FitResult(FittedRows):
 def load_fitted(path) -> HarmonicDrive:
     """A `HarmonicDrive` from a file written by `FitResult.save`."""
     from hdsim.model.catalog import load_unit
+    from hdsim.model.drive_file import require_number
     from hdsim.scenarios.scenario import read_toml
 
     path = Path(path)
@@ -297,9 +298,8 @@ def load_fitted(path) -> HarmonicDrive:
     else:
         raise InputError(f"{path}: [drive] must be a table of a drive file's keys, got {drive!r}")
     params = dict(params)
-    for key, value in params.items():  # as a drive file's: a string, a list or true is no value
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise InputError(f"{path}: parameters.{key} must be a number, got {type(value).__name__} {value!r}")
+    for key, value in params.items():  # as a drive file's
+        require_number(path, f"parameters.{key}", value)
     slots = {}
     for family, effect_id in effects.items():
         if family not in fx.FAMILIES:

@@ -171,9 +171,14 @@ def _label(path) -> str:
     return text if text.isprintable() else repr(text)
 
 
-def _number(source: str, key: str, value) -> float:
+def require_number(source, key: str, value) -> None:
+    """InputError unless ``value`` is a TOML number (a string, a list or true is none)."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise InputError(f"{source}: {key} must be a number, got {type(value).__name__} {value!r}")
+
+
+def _number(source: str, key: str, value) -> float:
+    require_number(source, key, value)
     try:
         value = float(value)
     except OverflowError:  # an integer beyond the float range
