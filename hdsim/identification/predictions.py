@@ -275,7 +275,7 @@ def sweep_predictions(fit, scale) -> list[Prediction]:
                  lambda law, way=way: starting_level(law, way), starting) for way in starting_levels(fit)]
     extrapolated = starting_torque_undetermined(fit) is not None
     # a direction without a plateau: the law's value there is its assumption (no asymmetry)
-    never = [way for way, d in (("forward", 1), ("reverse", -1)) if d not in fit.record.directions]
+    never = fit.record.never_run
     coordinates = fit.coordinates
     if coordinates is not None:  # the figures are linear in the amplitudes: one step of each
         sd, undetermined, covariance = _linear_steps(coordinates.covariance, coordinates.x)

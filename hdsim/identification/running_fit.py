@@ -146,6 +146,11 @@ class SweepRecord:
                 mask[s.start:s.stop] = True
         return mask
 
+    @property
+    def never_run(self) -> tuple:
+        """The directions ("forward", "reverse") the record never runs in."""
+        return tuple(way for way, d in (("forward", 1), ("reverse", -1)) if d not in self.directions)
+
     def term(self, name: str) -> RunningTerm:
         """The term of a family (its default form) or a term id, for this record (the ripple
         drops the output's order when the output turned less than once: a periodic term would
@@ -266,9 +271,10 @@ class RunningFit(TorqueFit):
     def held_at_zero(self) -> dict:
         """``family.name`` -> why: the amplitudes the record does not determine, held at 0 in the
         law (a direction asymmetry on a record that runs one way; `RunningTerm.direction_columns`)."""
-        if len(self.record.directions) != 1:
+        if len(self.record.never_run) != 1:
             return {}
-        run, other = ("forward", "reverse") if self.record.directions[0] > 0 else ("reverse", "forward")
+        other = self.record.never_run[0]
+        run = "reverse" if other == "forward" else "forward"
         why = (f"not determined by the record: it runs {run} only, where a direction asymmetry is the level "
                f"itself; the law is written with none (the same level {other})")
         terms = [self.record.term(form) for form in self.forms.values()]
@@ -497,7 +503,10 @@ def fit_running(record, families=(), rows=None, widened=(), refine: bool = True,
     # the amplitudes and ln ω of each non-linear parameter: its Jacobian column joins the design
     jacobian = nonlinear_columns(lambda values: _design(rec, terms, values, tuple(widened), False)[2][use],
                                  nonlinear, x)
-    cov = _covariance(np.column_stack([A[use], jacobian]) if nonlinear else A[use], y[use] - A[use] @ x)
+    try:  # the amplitudes' covariance (and the Stribeck speed's, in ln ω)
+        cov = widened_inverse(np.column_stack([A[use], jacobian]) if nonlinear else A[use], y[use] - A[use] @ x)
+    except np.linalg.LinAlgError:
+        cov = None
     sd = [] if cov is None else np.sqrt(np.maximum(np.diag(cov), 0.0))  # 1-σ of each coordinate
     coordinates = None if cov is None else SweepCoordinates(
         tuple(terms), tuple(owners), tuple(names), dict(nonlinear), rec.velocity_scale,
@@ -557,14 +566,6 @@ def _check_law_holds(residual: np.ndarray, rss: float, y: np.ndarray) -> None:
     if not abs(law_rss - rss) <= 1e-6 * max(rss, 1e-12 * float(y @ y)):
         raise RuntimeError(f"internal error: the running-torque law written back leaves RSS {law_rss:.9g} N²·m², "
                            f"the fitted amplitudes {rss:.9g}: a term did not hold its amplitudes")
-
-
-def _covariance(A, r) -> np.ndarray | None:
-    """Covariance of the amplitudes, (AᵀA)⁻¹ s² widened by n/n_eff for a correlated residual."""
-    try:
-        return widened_inverse(A, r)
-    except np.linalg.LinAlgError:
-        return None
 
 
 @dataclass(frozen=True)

@@ -68,10 +68,9 @@ def starting_levels(fit) -> dict:
     asymmetry the record does not determine (a standard uncertainty not below it: two
     levels would be an invented difference). On a record that runs one way, that way's
     ``F_s`` and None for the other: the record never runs it."""
-    ways = fit.record.directions
-    if len(ways) == 1:
-        run = "forward" if ways[0] > 0 else "reverse"
-        return {way: starting_level(fit.law, "both") if way == run else None for way in ("forward", "reverse")}
+    never = fit.record.never_run
+    if never:
+        return {way: None if way in never else starting_level(fit.law, "both") for way in ("forward", "reverse")}
     seen = _determined(float(fit.law.coulomb_asymmetry), fit.uncertainty.get(ASYMMETRY))
     return {way: starting_level(fit.law, way) for way in (("forward", "reverse") if seen else ("both",))}
 
