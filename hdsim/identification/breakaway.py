@@ -41,7 +41,7 @@ from hdsim.identification.running_diagnosis import RunningSession, RunningTorque
 from hdsim.identification.running_fit import TorqueFit, bounded_lsq
 from hdsim.identification.test_kinds import TestKind, register_test_kind
 from hdsim.io.data_checks import Check, slipping_starts
-from hdsim.io.running_checks import SIGN_SHARE, side_factor, speed_and_acceleration
+from hdsim.io.running_checks import SIGN_SHARE, negated_torque, side_factor, speed_and_acceleration
 from hdsim.model.family import FamilyKnowledge
 from hdsim.signals import breakaway_episodes, noise_level
 
@@ -378,13 +378,8 @@ def breakaway_torque_sign(meas):
     against = [s for s in starts if np.sign(s.torque) == -s.direction]
     if not starts or len(against) < SIGN_SHARE * len(starts):
         return meas, []
-    from dataclasses import replace
-
-    return replace(meas, torque=-torque), [Check(
-        "torque_sign", "warn", f"the torque before {len(against)} of {len(starts)} starts is against the motion "
-        "that follows, which nothing but the torque applied can start: it was logged with the other sign (the "
-        "torque the drive delivers back, or a sensor or current of the other sense); it is negated for the "
-        "checks and fits")]
+    return negated_torque(meas, f"the torque before {len(against)} of {len(starts)} starts is against the motion "
+                                "that follows, which nothing but the torque applied can start")
 
 
 def _starting_torque_section(metrics: dict) -> list:

@@ -409,11 +409,17 @@ def sweep_torque_sign(meas):
                          "torque was logged with the other sign or a load drove the shaft, and this sweep cannot "
                          "tell which; record a second speed or the other direction, or negate the torque "
                          "(columns={'torque_Nm': '-1*COLUMN'}) if its sign is the other way")
+    return negated_torque(meas, f"{told} ({why})")
+
+
+def negated_torque(meas, told: str) -> tuple:
+    """``meas`` with its torque negated, and the ``torque_sign`` warning that says so after
+    ``told`` (what showed it): a sweep's and a breakaway ramp's."""
     from dataclasses import replace
 
-    return replace(meas, torque=-torque), [Check(
-        "torque_sign", "warn", f"{told} ({why}): the torque was logged with the other sign (the torque the "
-        "drive delivers back, or a sensor or current of the other sense); it is negated for the checks and fits")]
+    return replace(meas, torque=-np.asarray(meas.torque, dtype=float)), [Check(
+        "torque_sign", "warn", f"{told}: the torque was logged with the other sign (the torque the drive "
+        "delivers back, or a sensor or current of the other sense); it is negated for the checks and fits")]
 
 
 def running_checks(meas, drive) -> tuple[list, dict]:
