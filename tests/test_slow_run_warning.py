@@ -73,3 +73,27 @@ def test_the_command_says_it_on_a_line_of_its_own_in_its_own_words(capsys):
         warnings.warn("slow here; evaluator='quasistatic' is fast, and 'auto' takes it", SlowRunWarning)
     err = capsys.readouterr().err
     assert err == "hdsim simulate: warn: slow here; --evaluator quasistatic is fast, and --evaluator auto takes it\n"
+
+
+def test_a_batch_over_the_friction_is_judged_sample_by_sample(sticking, monkeypatch):
+    """A batch that varies only an effect's parameter (a Sobol study of ``friction.sigma``
+    on the dynamic evaluator) raised a broadcasting error before it started, and of a batch
+    only the stiffest sample was judged, though a damped one does not ring."""
+    import numpy as np
+
+    K = float(sticking.base_stiffness)
+    batch = sticking.with_effects(friction=DahlFriction(torque_max=0.52, sigma=np.array([6600 * K, 1000 * K, 10 * K])),
+                                  damping=ViscousDamping(coefficient=np.array([0.2, 0.0, 0.0])))
+    mode = sticking_mode(batch)
+    # the damped 6600x sample does not ring; the undamped 1000x one does (the path tangent of
+    # a Dahl law at rest is sigma, plus the spring's own stiffness beside it)
+    assert mode["damping_ratio"] == 0.0 and 1000 <= mode["sticking_ratio"] < 1002
+
+    def integrate(*args, **kwargs):
+        raise _Stopped
+
+    monkeypatch.setattr(locked, "integrate", integrate)
+    with pytest.warns(SlowRunWarning, match=r"sticks at 1e\+03 times"), pytest.raises(_Stopped):
+        run_scenario(batch, "lost_motion")
+    calm = batch.with_effects(damping=ViscousDamping(coefficient=np.array([0.2, 0.2, 0.2])))
+    assert slow_run_reason(calm) is None

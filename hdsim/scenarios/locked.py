@@ -165,20 +165,23 @@ SLOW_STICKING_RATIO = 300.0
 SLOW_DAMPING_RATIO = 5e-5
 
 
-
-
 def sticking_mode(model: HarmonicDrive) -> dict[str, float]:
     """The output on its sticking friction: the friction's path tangent at rest over the
-    spring's stiffness, the mode's frequency [Hz] and its damping ratio (the sample of a
-    batch with the largest ratio)."""
-    K = np.atleast_1d(np.asarray(model.base_stiffness, dtype=float))
+    spring's stiffness, the mode's frequency [Hz] and its damping ratio. Of a batch, the
+    sample that will be slowest: the one of largest ratio among those damped below
+    `SLOW_DAMPING_RATIO` (a stiffer sample may be damped enough while a softer one rings),
+    else the one of largest ratio."""
+    # a batch may vary the geometry, the friction or the damping: each broadcast to the batch
+    K = np.broadcast_to(np.asarray(model.base_stiffness, dtype=float), (model.batch_size,))
     rest = np.zeros((len(model.friction.state_names), K.size))
-    tangent = np.broadcast_to(np.asarray(model.friction.path_tangent(rest, 1.0, 0.0 * K, K), dtype=float), K.shape)
-    J = np.broadcast_to(np.asarray(model.drive.J_out, dtype=float), K.shape)
-    c = np.broadcast_to(np.asarray(model.damping.coefficient_at(1.0), dtype=float), K.shape)
-    m = int(np.argmax(tangent / K))
-    return {"sticking_ratio": float(tangent[m] / K[m]), "frequency_Hz": float(np.sqrt(tangent[m] / J[m]) / (2 * np.pi)),
-            "damping_ratio": float(c[m] / (2.0 * np.sqrt(tangent[m] * J[m])))}
+    tangent, J, c = (np.broadcast_to(np.asarray(value, dtype=float), K.shape) for value in (
+        model.friction.path_tangent(rest, 1.0, 0.0 * K, K), model.drive.J_out, model.damping.coefficient_at(1.0)))
+    ratio = tangent / K
+    damping = c / (2.0 * np.sqrt(tangent * J))
+    ringing = damping < SLOW_DAMPING_RATIO
+    m = int(np.argmax(np.where(ringing, ratio, -np.inf))) if ringing.any() else int(np.argmax(ratio))
+    return {"sticking_ratio": float(ratio[m]), "frequency_Hz": float(np.sqrt(tangent[m] / J[m]) / (2 * np.pi)),
+            "damping_ratio": float(damping[m])}
 
 
 def slow_run_reason(model: HarmonicDrive) -> str | None:
