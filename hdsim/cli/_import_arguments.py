@@ -23,6 +23,22 @@ reading a log from other bench software (nothing needs editing):
 """
 
 
+def add_record_parser(subparsers, verb: str, help_text: str, effects_help: str):
+    """The parser of a verb that reads a bench log: DATA, ``--effects``, ``--unit`` and the
+    import options (`add_import_arguments`); the verb adds its own options to it."""
+    import argparse
+
+    p = subparsers.add_parser(verb, help=help_text, description=help_text + ".", epilog=IMPORT_EPILOG,
+                              formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("data", metavar="DATA", help="measurement file (CSV or HDF5; see docs/measurements.md)")
+    p.add_argument("--effects", default="", help=effects_help)
+    p.add_argument("--unit", default=None,
+                   help="built-in unit or drive file (TOML, see 'hdsim units --template') to start from "
+                        "(default CSG-25-100)")
+    add_import_arguments(p)
+    return p
+
+
 def add_import_arguments(parser) -> None:
     """Add the import options (contracts of the measurement files, section 1a) to a verb."""
     group = parser.add_argument_group("reading the log (see the notes below)")

@@ -19,19 +19,9 @@ HELP = "find the effect families a measurement needs: rank, add the best, refit,
 
 
 def register(subparsers) -> None:
-    import argparse
+    from hdsim.cli._import_arguments import add_record_parser
 
-    from hdsim.cli._import_arguments import IMPORT_EPILOG, add_import_arguments
-
-    p = subparsers.add_parser("diagnose", help=HELP, description=HELP + ".", epilog=IMPORT_EPILOG,
-                              formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("data", metavar="DATA", help="measurement file (CSV or HDF5; see docs/measurements.md)")
-    p.add_argument("--effects", default="",
-                   help="families or effect ids already in the model (the baseline)")
-    p.add_argument("--unit", default=None,
-                   help="built-in unit or drive file (TOML, see 'hdsim units --template') to start from "
-                        "(default CSG-25-100)")
-    add_import_arguments(p)
+    p = add_record_parser(subparsers, "diagnose", HELP, "families or effect ids already in the model (the baseline)")
     p.add_argument("--report", type=path_argument, default=None, metavar="DIR",
                    help="write figures and an HTML/Markdown page of every step here")
     p.add_argument("--max-rounds", default=None, type=int, metavar="N",

@@ -21,20 +21,10 @@ HELP = "fit the model with the named effect families to a measurement file"
 
 
 def register(subparsers) -> None:
-    import argparse
+    from hdsim.cli._import_arguments import add_record_parser
 
-    from hdsim.cli._import_arguments import IMPORT_EPILOG, add_import_arguments
-
-    p = subparsers.add_parser("fit", help=HELP, description=HELP + ".", epilog=IMPORT_EPILOG,
-                              formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("data", metavar="DATA", help="measurement file (CSV or HDF5; see docs/measurements.md)")
-    p.add_argument("--effects", default="",
-                   help="families or effect ids, e.g. hardening,friction or dahl; "
-                        "absent: the base model (linear compliance and angle offset)")
-    p.add_argument("--unit", default=None,
-                   help="built-in unit or drive file (TOML, see 'hdsim units --template') to start from "
-                        "(default CSG-25-100)")
-    add_import_arguments(p)
+    p = add_record_parser(subparsers, "fit", HELP, "families or effect ids, e.g. hardening,friction or dahl; "
+                                                   "absent: the base model (linear compliance and angle offset)")
     p.add_argument("--out", type=path_argument, default=None, metavar="FILE",
                    help="where to write the fitted parameter set (default: DATA stem + .fit.toml)")
     p.add_argument("--report", type=path_argument, default=None, metavar="DIR",
