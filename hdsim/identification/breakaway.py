@@ -30,7 +30,6 @@ identity check ``broke_away`` fails: ``wrong_test``).
 from __future__ import annotations
 
 import math
-from pathlib import Path
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -185,12 +184,6 @@ class BreakawayFit(TorqueFit):
                "fit": {"rows": self.n, "rmse_Nm": self.rmse_Nm, "n_params": self.n_params}}
         return "# hdsim breakaway fit: torques on the file's shaft [N·m], speeds on the WG shaft [rad/s]\n" + \
             tomli_w.dumps(doc)
-
-    def save(self, path):
-        from hdsim.atomic import write_text_atomic
-
-        write_text_atomic(path, self.to_toml())
-        return Path(path)
 
     def summary(self) -> dict:
         """JSON-ready summary (the ``hdsim fit --json`` object of a breakaway test)."""

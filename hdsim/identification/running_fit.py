@@ -169,13 +169,10 @@ class TorqueFit(FittedRows):
     def measurement(self) -> Measurement:
         return self.record.measurement
 
-    def rmse(self, rows=None) -> float:
-        r = self.residual[self.rows if rows is None else rows]
-        return float(np.sqrt(np.mean(r * r))) if r.size else float("nan")
-
     @property
     def rmse_Nm(self) -> float:
-        return self.rmse()
+        r = self.residual[self.rows]
+        return float(np.sqrt(np.mean(r * r))) if r.size else float("nan")
 
     @property
     def n_eff(self) -> float:
@@ -185,6 +182,14 @@ class TorqueFit(FittedRows):
         """``n_eff ln(RSS/n) + k ln n_eff``: the BIC with the residual's effective sample count."""
         n_eff = self.n_eff if n_eff is None else n_eff
         return n_eff * math.log(max(self.rss, 1e-300) / max(self.n, 1)) + self.n_params * math.log(n_eff)
+
+    def save(self, path) -> Path:
+        """Write the fit's file (``to_toml``) to ``path``; returns the path."""
+        from hdsim.atomic import write_text_atomic
+
+        path = Path(path)
+        write_text_atomic(path, self.to_toml())
+        return path
 
 
 @dataclass
@@ -338,13 +343,6 @@ class RunningFit(TorqueFit):
                 "# driven scenario's [input_friction] table (docs/cli.md, hdsim fit).\n")
         head += "".join(f"# {key} held at 0: {why}\n" for key, why in self.held_at_zero.items())
         return head + tomli_w.dumps(doc)
-
-    def save(self, path) -> Path:
-        from hdsim.atomic import write_text_atomic
-
-        path = Path(path)
-        write_text_atomic(path, self.to_toml())
-        return path
 
     @property
     def drive(self):
