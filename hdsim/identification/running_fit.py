@@ -135,18 +135,6 @@ class SweepRecord:
                    noise_level(torque, meas.time), turns, ways)
 
     @property
-    def plateau_speeds(self) -> np.ndarray:
-        return np.array([abs(s.speed) for s in self.segments])
-
-    def steady(self, direction: int) -> np.ndarray:
-        """Rows on plateaus of one direction (+1 forward, −1 reverse)."""
-        mask = np.zeros(self.speed.size, dtype=bool)
-        for s in self.segments:
-            if np.sign(s.speed) == direction:
-                mask[s.start:s.stop] = True
-        return mask
-
-    @property
     def never_run(self) -> tuple:
         """The directions ("forward", "reverse") the record never runs in."""
         return tuple(way for way, d in (("forward", 1), ("reverse", -1)) if d not in self.directions)
@@ -473,7 +461,8 @@ def fit_running(record, families=(), rows=None, widened=(), refine: bool = True,
     if np.count_nonzero(use) < 10:
         raise InputError(f"{rec.measurement.source}: fewer than 10 rows at a steady running speed to fit")
     y = rec.torque
-    grids = {t.family: t.grid(rec.plateau_speeds) for t in terms if t.grid(rec.plateau_speeds)}
+    plateau_speeds = np.array([abs(s.speed) for s in rec.segments])
+    grids = {t.family: t.grid(plateau_speeds) for t in terms if t.grid(plateau_speeds)}
     choices = [dict(zip(grids, values)) for values in itertools.product(*grids.values())]
 
     def solve(nonlinear, keep=False):

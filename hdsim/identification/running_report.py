@@ -30,22 +30,9 @@ RPM = 30.0 / math.pi
 
 
 def torque_vs_speed(fit, path, catalog_running_torque: float | None = None) -> Path:
-    """Plateau torque vs speed (measured), the fitted running torque, the catalog point.
-
-    Parameters
-    ----------
-    fit : hdsim.identification.running_fit.RunningFit
-        The fit.
-    path : str or os.PathLike
-        PNG to write.
-    catalog_running_torque : float, optional
-        Catalog no-load running torque on the input at 2000 rpm [N·m].
-
-    Returns
-    -------
-    pathlib.Path
-        The figure.
-    """
+    """Plateau torque vs speed (measured), the fitted running torque of ``fit`` (a
+    `RunningFit`) and the catalog point (``catalog_running_torque``: the no-load running
+    torque on the input at 2000 rpm [N·m]), as the PNG ``path``; returns its path."""
     rec = fit.record
     side = abs(rec.side_factor)
     torque = np.asarray(rec.measurement.torque, dtype=float)
@@ -75,26 +62,14 @@ def torque_vs_speed(fit, path, catalog_running_torque: float | None = None) -> P
 
 
 def ripple_vs_angle(fit, path, bins: int = 72) -> Path:
-    """What the model without ripple leaves on the plateaus, vs WG angle, with the fitted ripple.
-
-    Parameters
-    ----------
-    fit : hdsim.identification.running_fit.RunningFit
-        The fit.
-    path : str or os.PathLike
-        PNG to write.
-    bins : int
-        Bins over one WG turn.
-
-    Returns
-    -------
-    pathlib.Path
-        The figure.
-    """
+    """What the model without ripple leaves on the plateaus, vs WG angle in ``bins`` over one
+    turn, with the fitted ripple of ``fit`` (a `RunningFit`), as the PNG ``path``; returns its path."""
     rec = fit.record
     side = abs(rec.side_factor)
     meas = rec.measurement
-    plateau = rec.steady(1) | rec.steady(-1)
+    plateau = np.zeros(rec.speed.size, dtype=bool)
+    for seg in rec.segments:
+        plateau[seg.start:seg.stop] = True
     flat = fit.law.with_updates(ripple_orders=(), ripple_amplitudes=(), ripple_phases=())
     model = side * (flat.torque(rec.speed, meas.wg_angle) + fit.inertia * rec.accel)
     level = (np.asarray(meas.torque, dtype=float) - model) * np.sign(rec.speed)
