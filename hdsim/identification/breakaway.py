@@ -36,9 +36,9 @@ import numpy as np
 
 from hdsim.errors import InputError, unknown_name
 from hdsim.identification.optimizer import inverse_gram, json_finite
-from hdsim.identification.running_diagnosis import RunningSession, RunningTorqueTest
+from hdsim.identification.running_diagnosis import RunningSession, TorqueTest
 from hdsim.identification.running_fit import TorqueFit, bounded_lsq
-from hdsim.identification.test_kinds import TestKind, register_test_kind
+from hdsim.identification.test_kinds import register_test_kind
 from hdsim.io.data_checks import Check, slipping_starts
 from hdsim.io.running_checks import SIGN_SHARE, negated_torque, side_factor, speed_and_acceleration
 from hdsim.model.family import FamilyKnowledge
@@ -287,8 +287,12 @@ def breakaway_checks(meas, scale) -> tuple[list, dict]:
     return checks, {"starts": len(starts), "directions": len(ways)}
 
 
-class BreakawayTest(RunningTorqueTest):
-    """The breakaway (starting-torque) test: the torque raised from rest until the drive turns."""
+class BreakawayTest(TorqueTest):
+    """The breakaway (starting-torque) test: the torque raised from rest until the drive turns.
+
+    No figures of its own (the residual against time, drawn for every kind, shows each
+    start) and no predictions (the starting torque is measured, with its uncertainty, in
+    its own section)."""
 
     name = "breakaway"
     record_word = "ramp"
@@ -326,30 +330,18 @@ class BreakawayTest(RunningTorqueTest):
     def checks(self, meas, scale):
         return breakaway_checks(meas, scale)
 
-    def plausibility(self, fit, scale):
-        return []
-
     def limits(self, diagnosis_json, data, ranking):
         out = ["starts in the other direction: an asymmetry needs both"] if data.get("directions", 2) < 2 else []
-        return out + TestKind.limits(self, diagnosis_json, data, ranking)  # and the ties' measurements
+        return out + super().limits(diagnosis_json, data, ranking)  # and the ties' measurements
 
     def unexplained(self) -> str:
         return ("the torque after breakaway keeps a structure no breakaway family explains: look at the residual "
                 "against time in the report (a controller that changes the torque, a load on the shaft)")
 
-    def report_figures(self, diagnosis, folder, scale):
-        return []  # the residual against time, drawn for every kind, shows each start
-
-    def fit_figures(self, result, folder, scale):
-        return []
-
     parameters_heading = "Fitted parameters (torques on the file's shaft)"
     #: a start from rest is a transient of a few rows, which the noise check (a median)
     #: does not see thinned away: a breakaway log is fitted whole
     thinnable = False
-
-    def predictions(self, result, scale):
-        return []  # the starting torque is measured, with its uncertainty, in its own section
 
     def report_sections(self, diagnosis, diagnosis_json):
         return _starting_torque_section(diagnosis_json["metrics"])

@@ -61,10 +61,10 @@ RUNNING_THRESHOLDS = Thresholds(score=-10.0, holdout_gain=0.02, floor_holdout_ga
                                 min_share=0.2, proxy_holdout_gain=0.05, tie_share=0.05)
 
 
-class RunningTorqueTest(TestKind):
-    """The running-torque (friction sweep) test: the torque to turn the drive at steady speeds."""
+class TorqueTest(TestKind):
+    """What the torque tests share (a sweep, and a breakaway ramp `hdsim.identification.breakaway`):
+    an error in N·m, the running-torque thresholds, a residual judged against the record's noise floor."""
 
-    name = "running_torque"
     error_unit = "N·m"
     error_key = "rmse_Nm"
     report_unit = ("N·m", 1.0)
@@ -73,15 +73,49 @@ class RunningTorqueTest(TestKind):
     #: what the verdict calls a record of this kind
     record_word = "sweep"
 
-    def families(self):
-        return {family: type(term) for family, term in RUNNING_FAMILIES.items()}
-
     def ordered(self, current):
         return list(current)  # the order the families entered the law
 
     def keeps_entry(self, entry, kept):
         # the same pair may come up again in a later round
         return all(set(a["families"]) != set(entry["families"]) for a in kept)
+
+    def fit_errors(self, fit) -> dict:
+        return {"rmse_Nm": fit.rmse_Nm}
+
+    def diagnosis_json(self, diagnosis) -> dict:
+        summary = diagnosis.final.fit.summary()
+        return {"metrics": summary["metrics"], "noise_floor_Nm": summary["noise_floor_Nm"]}
+
+    def verdict(self, w: dict) -> str:
+        if w["explained"]:
+            return super().verdict(w)
+        return (f"the residual keeps structure (rms {w['rms_over_noise']:.1f}× the noise floor): the "
+                f"{self.record_word} holds an effect that no {self.name.replace('_', '-')} family explains, or "
+                "explains only in part")
+
+    def residual_whiteness(self, fit) -> dict:
+        return _explained(fit, _floor(fit.record))
+
+    #: units of the fitted figures that are no term's torque amplitude (the breakaway
+    #: fit's bare ``viscous`` included)
+    OTHER_UNITS = MappingProxyType({"inertia": "kg·m²", "stribeck_speed": "rad/s", "viscous": "N·m·s/rad"})
+
+    def parameter_unit(self, result, name):
+        family, _, column = name.rpartition(".")
+        terms = [BASE_TERM, *RUNNING_FAMILIES.values(), *(t for forms in RUNNING_FORMS.values() for t in forms)]
+        own = {c: u for t in terms if t.family == family for c, u in t.column_units.items()}
+        return own.get(column) or self.OTHER_UNITS.get(column, "N·m")
+
+
+class RunningTorqueTest(TorqueTest):
+    """The running-torque (friction sweep) test: the torque to turn the drive at steady speeds."""
+
+    name = "running_torque"
+    parameters_heading = "Fitted parameters (on the wave-generator shaft)"
+
+    def families(self):
+        return {family: type(term) for family, term in RUNNING_FAMILIES.items()}
 
     def parse_effects(self, effects):
         return parse_running_forms(effects)
@@ -107,28 +141,11 @@ class RunningTorqueTest(TestKind):
             diagnosis.ambiguous.append(entry)
         return diagnosis
 
-    def fit_errors(self, fit) -> dict:
-        return {"rmse_Nm": fit.rmse_Nm}
-
     def fit_json(self, fit) -> dict:
         summary = fit.summary()
         # derived: the inertia and the starting torque (each way, with its basis), as `hdsim fit` gives them
         return {"fitted": summary["fitted"], "uncertainty": summary["uncertainty"], "law": summary["law"],
                 "derived": summary["derived"], "not_determined": summary["not_determined"]}
-
-    def diagnosis_json(self, diagnosis) -> dict:
-        summary = diagnosis.final.fit.summary()
-        return {"metrics": summary["metrics"], "noise_floor_Nm": summary["noise_floor_Nm"]}
-
-    def verdict(self, w: dict) -> str:
-        if w["explained"]:
-            return f"explained: the residual is at the noise level (rms {w['rms_over_noise']:.2f}× the noise floor)"
-        return (f"the residual keeps structure (rms {w['rms_over_noise']:.1f}× the noise floor): the "
-                f"{self.record_word} holds an effect that no {self.name.replace('_', '-')} family explains, or "
-                "explains only in part")
-
-    def residual_whiteness(self, fit) -> dict:
-        return _explained(fit, _floor(fit.record))
 
     def prepare(self, meas):
         from hdsim.io.running_checks import sweep_torque_sign
@@ -163,17 +180,6 @@ class RunningTorqueTest(TestKind):
         paths = fit_figures(result, Path(folder) / "fit", (scale.running_torque or None) if scale else None)
         return list(zip(paths, ("Plateau running torques against speed, with the fitted law and the catalog point.",
                                 "What the law without its ripple leaves, against the wave-generator angle.")))
-
-    parameters_heading = "Fitted parameters (on the wave-generator shaft)"
-    #: units of the fitted figures that are no term's torque amplitude (the breakaway
-    #: fit's bare ``viscous`` included)
-    OTHER_UNITS = MappingProxyType({"inertia": "kg·m²", "stribeck_speed": "rad/s", "viscous": "N·m·s/rad"})
-
-    def parameter_unit(self, result, name):
-        family, _, column = name.rpartition(".")
-        terms = [BASE_TERM, *RUNNING_FAMILIES.values(), *(t for forms in RUNNING_FORMS.values() for t in forms)]
-        own = {c: u for t in terms if t.family == family for c, u in t.column_units.items()}
-        return own.get(column) or self.OTHER_UNITS.get(column, "N·m")
 
     def predictions(self, result, scale):
         from hdsim.identification.predictions import sweep_predictions
@@ -239,8 +245,7 @@ class RunningSession:
         torque that reverses with the motion and one that does not are the same there): it
         enters in its default form, and the outcome says what would tell them apart."""
         forms = RUNNING_FORMS[family]
-        both_ways = len({np.sign(seg.speed) for seg in self.record.segments}) > 1
-        return tuple(term.id for term in (forms if both_ways else forms[:1]))
+        return tuple(term.id for term in (forms if len(self.record.directions) > 1 else forms[:1]))
 
     @property
     def floor(self) -> float:
@@ -384,12 +389,10 @@ def one_way_ripple(diagnosis) -> dict | None:
     same model; a ripple of the baseline was not added (``added`` False, scores None), and
     the form it was given stays open as a pair the record cannot tell apart."""
     fit = diagnosis.final.fit
-    form = (getattr(fit, "forms", None) or {}).get("ripple")  # a breakaway's law has no ripple
-    if form is None or len({np.sign(seg.speed) for seg in fit.record.segments}) > 1:
+    form = fit.forms.get("ripple")
+    if form is None or len(fit.record.directions) > 1:
         return None
-    other = next((term.id for term in RUNNING_FORMS["ripple"] if term.id != form), None)
-    if other is None:
-        return None
+    other = next(term.id for term in RUNNING_FORMS["ripple"] if term.id != form)
     k = next((i for i, step in enumerate(diagnosis.steps) if step.added == "ripple"), None)
     scores = [None, None]
     if k is not None:
