@@ -233,16 +233,16 @@ def fit_breakaway(record, families=(), rows=None, unit=None) -> BreakawayFit:
     if not rec.starts:
         raise InputError("the shaft never started from rest: there is no breakaway to fit")
     grid = STRIBECK_GRID if "friction" in families else STRIBECK_GRID[:1]
-    best = None
-    for ws in grid:
+
+    def solve(ws):
         names, A, lower = _columns(rec, families, ws)
         if n <= A.shape[1] + 1:
             raise InputError(f"{n} moving rows: too few to fit {A.shape[1]} parameters")
         x = bounded_lsq(A[use], rec.torque[use], lower, np.inf)
         r = rec.torque[use] - A[use] @ x
-        if best is None or float(r @ r) < best[0]:
-            best = (float(r @ r), ws, names, A, x)
-    rss, ws, names, A, x = best
+        return float(r @ r), ws, names, A, x
+
+    rss, ws, names, A, x = min((solve(ws) for ws in grid), key=lambda s: s[0])
     side = abs(rec.side_factor)
     residual = (rec.torque - A @ x) * side
     cov = rss / max(n - len(names), 1) * inverse_gram(A[use])

@@ -67,9 +67,8 @@ def refine_nonlinear(solve, grids: dict, best: tuple) -> tuple:
             return trial[0]
 
         minimize_scalar(cost, bounds=(low, high), method="bounded", options={"xatol": REFINE_TOLERANCE})
-        trial = kept[0]
-        if trial[0] < best[0]:
-            best = trial
+        if kept[0][0] < best[0]:
+            best = kept[0]
     return best
 
 

@@ -137,7 +137,7 @@ def starting_torque_summary(fit) -> dict:
         elif way in levels:
             out[f"starting_torque_{way}_Nm"] = side * levels[way]
             out[f"starting_torque_{way}_uncertainty_Nm"] = sigma({LEVEL: 1.0, RISE: 1.0, ASYMMETRY: sign})
-    never = [way for way, level in levels.items() if level is None]
+    never = fit.record.never_run
     ways = (f"{never[0]} not run: the record determines neither its starting torque nor a direction asymmetry"
             if never else "each way: the law's direction asymmetry shifts its level at rest" if "both" not in levels
             else "one level both ways: the law has no direction asymmetry" if fit.law.coulomb_asymmetry == 0.0
