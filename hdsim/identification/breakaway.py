@@ -30,7 +30,7 @@ identity check ``broke_away`` fails: ``wrong_test``).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -126,19 +126,8 @@ class BreakawayRecord:
         return out
 
 
-@dataclass
 class BreakawayFit(TorqueFit):
     """The law of a breakaway record fitted on its moving rows (module text)."""
-
-    residual: np.ndarray
-    rows: np.ndarray
-    record: BreakawayRecord
-    families: list = field(default_factory=list)
-    fitted: dict = field(default_factory=dict)
-    uncertainty: dict = field(default_factory=dict)
-    n_params: int = 0
-    #: the drive the fit was made for (`hdsim.fit`'s ``unit``; None: the default unit)
-    unit: object = None
 
     def metrics(self) -> dict:
         # starting_torque_forward_Nm, …_forward_uncertainty_Nm, …_reverse_Nm, …_reverse_uncertainty_Nm
@@ -251,7 +240,7 @@ def fit_breakaway(record, families=(), rows=None, unit=None) -> BreakawayFit:
     uncertainty = {k: float(math.sqrt(max(cov[i, i], 0.0))) * units.get(k, 1.0) for i, k in enumerate(names)}
     if "friction" in families:
         fitted["friction.stribeck_speed"] = float(ws)
-    return BreakawayFit(residual, use, rec, families, fitted, uncertainty, len(names) + ("friction" in families),
+    return BreakawayFit(rec, families, residual, use, len(names) + ("friction" in families), fitted, uncertainty,
                         unit)
 
 

@@ -149,9 +149,20 @@ class SweepRecord:
         return term
 
 
+@dataclass
 class TorqueFit(FittedRows):
     """A least-squares torque law fitted on the rows a record moves (a sweep's, a breakaway's):
     its rms error [N·m], effective sample count and BIC (``n_params``: its free parameters)."""
+
+    record: object
+    families: list
+    residual: np.ndarray
+    rows: np.ndarray
+    n_params: int
+    fitted: dict
+    uncertainty: dict
+    #: the drive the fit was made for (`hdsim.fit`'s ``unit``; None: the default unit)
+    unit: object
 
     @property
     def measurement(self) -> Measurement:
@@ -202,22 +213,13 @@ class RunningFit(TorqueFit):
         Amplitudes by ``family.name`` on the WG shaft, and their 1-σ uncertainties.
     """
 
-    record: SweepRecord
-    families: list
     law: InputFriction
     inertia: float
     prediction: np.ndarray
-    residual: np.ndarray
-    rows: np.ndarray
-    n_params: int
-    fitted: dict = field(default_factory=dict)
-    uncertainty: dict = field(default_factory=dict)
     #: family -> the id of its form in the law
     forms: dict = field(default_factory=dict)
     #: the amplitudes and their covariance (None without one)
     coordinates: SweepCoordinates | None = None
-    #: the drive the fit was made for (`hdsim.fit`'s ``unit``; None: the default unit)
-    unit: object = None
 
     def metrics(self) -> dict:
         """``running_torque_forward_Nm`` / ``_reverse_Nm`` on the file's side: one definition
@@ -501,8 +503,8 @@ def fit_running(record, families=(), rows=None, widened=(), refine: bool = True,
     uncertainty = {k: float(s) for k, s in zip(keys, sd)}
     # ω's own: σ(ln ω)·ω
     uncertainty.update({f"{f}.stribeck_speed": float(v * s) for (f, v), s in zip(nonlinear.items(), sd[len(keys):])})
-    fit = RunningFit(rec, families, law, inertia, prediction, residual, use, n_params, fitted, uncertainty,
-                     {t.family: t.id for t in terms[1:]}, coordinates, unit)
+    fit = RunningFit(rec, families, residual, use, n_params, fitted, uncertainty, unit, law, inertia, prediction,
+                     {t.family: t.id for t in terms[1:]}, coordinates)
     for key in fit.held_at_zero:  # left out of the design: 0 in the law, not determined
         fitted[key], uncertainty[key] = 0.0, math.inf
     return fit
