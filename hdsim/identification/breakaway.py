@@ -290,9 +290,7 @@ class BreakawayTest(TorqueTest):
         return dict(FAMILIES)
 
     def parse_effects(self, effects):
-        if not effects:
-            return {}
-        names = [e.strip() for e in effects.split(",")] if isinstance(effects, str) else list(effects)
+        names = [e.strip() for e in effects.split(",")] if isinstance(effects, str) else list(effects or ())
         for name in names:
             if name and name not in FAMILIES:
                 raise unknown_name("breakaway family", name, FAMILIES)

@@ -95,7 +95,7 @@ class TorqueTest(TestKind):
                 "explains only in part")
 
     def residual_whiteness(self, fit) -> dict:
-        return _explained(fit, _floor(fit.record))
+        return _explained(fit)
 
     #: units of the fitted figures that are no term's torque amplitude (the breakaway
     #: fit's bare ``viscous`` included)
@@ -247,11 +247,6 @@ class RunningSession:
         forms = RUNNING_FORMS[family]
         return tuple(term.id for term in (forms if len(self.record.directions) > 1 else forms[:1]))
 
-    @property
-    def floor(self) -> float:
-        """The record's model-free torque noise on the file's side [N·m]."""
-        return _floor(self.record)
-
     def baseline(self) -> Step:
         ids = list(self.chosen.values())
         return Step(list(self.chosen), self.fit_model(ids), self._holdout_rss(ids))
@@ -271,7 +266,7 @@ class RunningSession:
 
     def explained(self, step: Step) -> dict:
         if "whiteness" not in step.memo:
-            step.memo["whiteness"] = _explained(step.fit, self.floor)
+            step.memo["whiteness"] = _explained(step.fit)
         return step.memo["whiteness"]
 
     def confidence(self, steps) -> dict:
@@ -294,7 +289,7 @@ class RunningSession:
 
     def _share(self, before, after) -> float:
         """Share of the residual variance above the noise floor that ``after`` removes from ``before``."""
-        missing = before.rss - self.floor ** 2 * before.n
+        missing = before.rss - _floor(self.record) ** 2 * before.n
         return min(max((before.rss - after.rss) / missing, 0.0), 1.0) if missing > 0 else 0.0
 
     def _proxy_gains(self, current: Step, ids: list) -> list[float] | None:
@@ -352,8 +347,9 @@ def _floor(record) -> float:
     return record.noise_floor * abs(record.side_factor)
 
 
-def _explained(fit, floor: float) -> dict:
-    """Whiteness of the residual, judged against the record's model-free noise floor."""
+def _explained(fit) -> dict:
+    """Whiteness of the residual, judged against the record's model-free noise floor (`_floor`)."""
+    floor = _floor(fit.record)
     r = fit.residual[fit.rows]
     w = whiteness(r)
     # the rms about zero, not about the mean: a torque model has no offset, and a level that
