@@ -232,10 +232,8 @@ class RunningFit(TorqueFit):
         return {f"running_torque_{way}_Nm": value for way, (value, _) in self._running_torques().items()}
 
     def starting_torque(self) -> dict:
-        """The law's starting torque on the file's side [N·m], each way where the law is
-        asymmetric, with its standard uncertainty, or None where the record does not
-        determine it, and ``starting_torque_basis`` saying which
-        (`hdsim.identification.sweep_start.starting_torque_summary`)."""
+        """The law's starting torque on the file's side [N·m], with its standard uncertainty and
+        basis (`hdsim.identification.sweep_start.starting_torque_summary`)."""
         from hdsim.identification.sweep_start import starting_torque_summary
 
         return starting_torque_summary(self)

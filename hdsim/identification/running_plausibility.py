@@ -1,5 +1,5 @@
-"""A friction sweep's fitted law against the drive's catalog and physics
-(`hdsim.identification.running_fit`, re-exported there)."""
+"""A friction sweep's fitted law (`hdsim.identification.running_fit`) against the drive's
+catalog and physics: the running-torque kind's ``plausibility``."""
 
 from __future__ import annotations
 
