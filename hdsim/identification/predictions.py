@@ -78,29 +78,21 @@ NONLINEARITY = 0.2
 UNDETERMINED = "not determined by the record"
 
 
-def _steps(covariance: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(step of each coordinate, which are undetermined, the covariance of the determined
-    ones): a coordinate whose standard deviation exceeds ``scale`` (its own size) is
-    undetermined and steps by ``scale`` (enough to see whether a figure moves with it); a
-    determined one steps by its standard deviation."""
-    return _split(covariance, ~(np.diag(covariance) <= scale ** 2), scale)  # NaN and infinity included
-
-
-def _linear_steps(covariance: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """`_steps` for figures linear in the coordinates ``x``: only an infinite (or NaN)
-    variance is undetermined, and it steps by the coordinate's own size (a micro-unit at 0).
-    A finite variance larger than the value (an amplitude zero within its uncertainty) is a
-    Gaussian like any other here: ``±1.96 √(g Σ gᵀ)`` is exact for a linear figure."""
-    return _split(covariance, ~np.isfinite(np.diag(covariance)), np.maximum(np.abs(x), 1e-6))
-
-
-def _split(covariance, undetermined, undetermined_step) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(steps, ``undetermined``, the covariance of the determined coordinates): an undetermined
-    coordinate steps by ``undetermined_step``, a determined one by its standard deviation."""
+def _steps(covariance, undetermined, undetermined_step) -> tuple[np.ndarray, np.ndarray]:
+    """(the step of each coordinate, the covariance of the determined ones): an ``undetermined``
+    coordinate steps by ``undetermined_step`` (enough to see whether a figure moves with it),
+    a determined one by its standard deviation."""
     variance = np.where(undetermined, 0.0, np.diag(covariance))
     steps = np.where(undetermined, undetermined_step, np.sqrt(np.maximum(variance, 0.0)))
-    determined = np.where(undetermined[:, None] | undetermined[None, :], 0.0, covariance)
-    return steps, undetermined, determined
+    return steps, np.where(undetermined[:, None] | undetermined[None, :], 0.0, covariance)
+
+
+def _band(value: float, g: np.ndarray, undetermined: np.ndarray, covariance: np.ndarray) -> tuple[float, float]:
+    """``value ± 1.96 √(g Σ gᵀ)`` for the gradient ``g``, taken as zero along the undetermined
+    coordinates (``covariance``: of the determined ones)."""
+    g = np.where(undetermined, 0.0, g)
+    half = Z95 * float(np.sqrt(max(g @ covariance @ g, 0.0)))
+    return value - half, value + half
 
 
 def _moves(first: np.ndarray, undetermined: np.ndarray, value: float) -> bool:
@@ -156,8 +148,10 @@ def catalog_predictions(result, *, samples: int = SAMPLES, seed: int = 0) -> lis
     catalog = model.provenance.get("catalog") or {}
     if coordinates is None:
         rows, sd = None, np.zeros(0)
-    else:  # one unit of u: the size of a log coordinate's relative change
-        sd, undetermined, covariance = _steps(coordinates.covariance, np.ones(coordinates.u.size))
+    else:  # a standard deviation above one unit of u (the size of a log coordinate's relative change,
+        # NaN and infinity included) is undetermined, and steps by that unit
+        undetermined = ~(np.diag(coordinates.covariance) <= 1.0)
+        sd, covariance = _steps(coordinates.covariance, undetermined, 1.0)
         rows = np.vstack([coordinates.u, coordinates.u + np.diag(sd), coordinates.u - np.diag(sd)])
     k = sd.size
     out = []
@@ -177,9 +171,8 @@ def catalog_predictions(result, *, samples: int = SAMPLES, seed: int = 0) -> lis
                 continue
             second = np.where(undetermined, 0.0, v[1:k + 1] + v[k + 1:] - 2.0 * v[0])
             if np.all(np.abs(second) <= NONLINEARITY * np.abs(first) + 1e-12 * abs(v[0])):
-                g = np.where(undetermined, 0.0, first / np.where(sd > 0, sd, 1.0))
-                half = Z95 * float(np.sqrt(max(g @ covariance @ g, 0.0)))
-                bands[metric] = (v[0] - half, v[0] + half, "linearised")
+                low, high = _band(v[0], first / np.where(sd > 0, sd, 1.0), undetermined, covariance)
+                bands[metric] = (low, high, "linearised")
             else:
                 nonlinear.append(metric)
         if nonlinear:  # one batch of draws for every metric of the test that needs them
@@ -278,7 +271,10 @@ def sweep_predictions(fit, scale) -> list[Prediction]:
     never = fit.record.never_run
     coordinates = fit.coordinates
     if coordinates is not None:  # the figures are linear in the amplitudes: one step of each
-        sd, undetermined, covariance = _linear_steps(coordinates.covariance, coordinates.x)
+        # and only an infinite (or NaN) variance is undetermined (the module text); it steps by the
+        # amplitude's own size (a micro-unit at 0)
+        undetermined = ~np.isfinite(np.diag(coordinates.covariance))
+        sd, covariance = _steps(coordinates.covariance, undetermined, np.maximum(np.abs(coordinates.x), 1e-6))
         moved = {j: coordinates.law(coordinates.x + sd[j] * np.eye(sd.size)[j]) for j in np.flatnonzero(sd > 0)}
     out = []
     for label, figure, datasheet in figures:
@@ -295,8 +291,6 @@ def sweep_predictions(fit, scale) -> list[Prediction]:
             if np.all(np.isfinite(g)) and _moves(g * sd, undetermined, value):
                 method = UNDETERMINED
             elif np.all(np.isfinite(g)):
-                half = Z95 * float(np.sqrt(max(np.where(undetermined, 0.0, g) @ covariance
-                                               @ np.where(undetermined, 0.0, g), 0.0)))
-                low, high, method = value - half, value + half, "linear in the amplitudes"
+                (low, high), method = _band(value, g, undetermined, covariance), "linear in the amplitudes"
         out.append(Prediction(label, "N·m", value, low, high, datasheet or None, method))
     return out
