@@ -81,8 +81,7 @@ def block_sums(labels: np.ndarray, n_blocks: int, fit_residual, holdout_residual
 
 def resample_counts(n_blocks: int, resamples: int = RESAMPLES, seed: int = 0) -> np.ndarray:
     """(resamples, n_blocks) counts of each block in a resample with replacement."""
-    rng = np.random.default_rng(seed)
-    draws = rng.integers(0, n_blocks, size=(resamples, n_blocks))
+    draws = np.random.default_rng(seed).integers(0, n_blocks, size=(resamples, n_blocks))
     return np.stack([np.bincount(row, minlength=n_blocks) for row in draws]).astype(float)
 
 
@@ -115,8 +114,7 @@ def comparison_table(names, holdout_residuals, labels: np.ndarray) -> list[dict]
     return rows
 
 
-def diagnosis_confidence(meas, steps: list, masks: list, one_rate: bool, thresholds: Thresholds,
-                         rate_partner=lambda family: "") -> dict:
+def diagnosis_confidence(meas, steps: list, masks: list, one_rate: bool, thresholds: Thresholds, rate_partner) -> dict:
     """Inclusion probabilities and comparison tables by round (`hdsim.identification.confidence`),
     with the acceptance rule of ``thresholds`` and the rate pairs of ``rate_partner``
     (family -> the family one loading rate cannot tell it from)."""
@@ -171,12 +169,11 @@ def diagnosis_confidence(meas, steps: list, masks: list, one_rate: bool, thresho
                     elif other in fams:
                         j = fams.index(other)
                         chosen &= ~(mine & explains_as_well(S[i], np.array(scores)[j], thresholds))
-            for i, c in enumerate(cands):
-                probabilities[c.family] = float(np.mean(chosen & (best == i)))
-            probabilities["none"] = float(1.0 - np.mean(chosen))
+            probabilities = {c.family: float(np.mean(chosen & (best == i))) for i, c in enumerate(cands)}
             # a family's figure is from its last round as a candidate: the round that
             # added it (it is no candidate afterwards), else the round the procedure stopped
-            inclusion.update({c.family: probabilities[c.family] for c in cands})
+            inclusion.update(probabilities)
+            probabilities["none"] = float(1.0 - np.mean(chosen))
         names = ["(nothing added)"] + [c.family for c in cands]
         out_rounds.append({"round": k + 1, "probabilities": probabilities,
                            "comparison": comparison_table(names, holdouts, labels)})
