@@ -194,10 +194,7 @@ def diagnose(measurement: Measurement, effects=None, *, unit=None, families=None
         ``.to_json()`` and ``.report(directory)``; a `WrongTest` (outcome
         ``wrong_test``) when the record is not the test it claims.
     """
-    measurement = _record(measurement)
-    kind = test_kind(measurement.test)
-    for names in (effects, families):  # a misnamed family is refused before the record is examined
-        kind.baseline_effects(names)
+    measurement, kind = _record(measurement, effects, families)
     prepared, checks, data, wrong, scale = prepare_record(measurement, unit)
     if wrong:
         return WrongTest(measurement, wrong, checks, data)
@@ -228,9 +225,7 @@ def fit(measurement: Measurement, effects=None, *, unit=None):
         A record that is not the test it claims (the sentence of the failed check), not a
         record at all, or ``effects`` naming a family the test does not know.
     """
-    measurement = _record(measurement)
-    kind = test_kind(measurement.test)
-    kind.baseline_effects(effects)  # a misnamed family is refused before the record is examined
+    measurement, kind = _record(measurement, effects)
     prepared, checks, data, wrong, scale = prepare_record(measurement, unit)
     if wrong:
         raise InputError(f"{measurement.source}: this is not a {measurement.test} test: {wrong}")
@@ -240,11 +235,15 @@ def fit(measurement: Measurement, effects=None, *, unit=None):
     return result
 
 
-def _record(measurement) -> Measurement:
-    """A record: a `Measurement` as it is, a path read with `load_measurement`'s defaults."""
-    if isinstance(measurement, Measurement):
-        return measurement
+def _record(measurement, *effects) -> tuple[Measurement, TestKind]:
+    """A record (a `Measurement` as it is, a path read with `load_measurement`'s defaults) and
+    its test kind; a misnamed family in ``effects`` is refused before the record is examined."""
     if isinstance(measurement, (str, os.PathLike)):
-        return load_measurement(measurement)
-    raise InputError(f"expected a measurement (hdsim.load_measurement(path)) or a file path, "
-                     f"got {type(measurement).__name__}")
+        measurement = load_measurement(measurement)
+    elif not isinstance(measurement, Measurement):
+        raise InputError(f"expected a measurement (hdsim.load_measurement(path)) or a file path, "
+                         f"got {type(measurement).__name__}")
+    kind = test_kind(measurement.test)
+    for names in effects:
+        kind.baseline_effects(names)
+    return measurement, kind
