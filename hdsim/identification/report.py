@@ -135,8 +135,7 @@ def twist_figures(diagnosis, folder) -> list[tuple[Path, str]]:
 
 def _loop_by_rate(v):
     rate, direction, r = v["rate"], v["direction"], v["residual"]
-    pos = rate[rate > 0]
-    if pos.size < 10:
+    if np.count_nonzero(rate > 0) < 10:
         return [], []
     level = np.round(np.log(np.maximum(rate, 1e-300)) / 0.2)  # fifths of a natural log of the rate
     out_r, out_w = [], []

@@ -49,8 +49,7 @@ def new_figure(figsize: tuple[float, float]):
 
 
 def save(fig, path: Path) -> Path:
-    save_figure(fig, path, dpi=110, bbox_inches="tight")
-    return Path(path)
+    return save_figure(fig, path, dpi=110, bbox_inches="tight")
 
 
 def step_label(step) -> str:
@@ -204,7 +203,7 @@ def _predictions(page: Page, kind, fit, scale_numbers, whiteness: dict | None = 
     kind without predictions."""
     from hdsim.identification.predictions import misfit_caveat
 
-    predictions = kind.predictions(fit, scale_numbers) if fit is not None else []
+    predictions = kind.predictions(fit, scale_numbers)
     if not predictions:
         return
     rows = []
@@ -252,7 +251,6 @@ def _checks(page: Page, summary: dict) -> Page:
 def wrong_test_page(measurement, folder, summary: dict) -> Path:
     """The page of a record that is not the test it claims: the verdict and the checks that
     say what it looks like (nothing was fitted). Returns ``index.html``."""
-    Path(folder).mkdir(parents=True, exist_ok=True)
     page = _top(Page(f"Diagnosis of {measurement.source}"), summary)
     return page.heading("Reproduce").table(("", ""), provenance(measurement)).write(folder)
 
@@ -266,9 +264,8 @@ def _number(value, scale: float) -> str:
 
 
 def _before_after(kind, d: dict, unit: str, scale: float):
-    # the error columns of the table: those in the kind's error unit
-    fixed = {"step", "effects", "added", "provisional", "other_form", "score"}
-    keys = [k for k in d["table"][0] if k not in fixed and k.endswith(_floor_key(kind)[len("noise_floor"):])]
+    # the error columns of the table: those in the kind's error unit (``_rad`` …)
+    keys = [k for k in d["table"][0] if k.endswith("_" + kind.error_key.split("_", 1)[1])]
     head = ["step", "effects", "added"] + [
         f"{ERROR_NAMES.get(k.rsplit('_', 1)[0], k)} [{unit}]" for k in keys] + ["score"]
     rows = []
@@ -357,10 +354,9 @@ def _residual_vs_time(measurement, fits: list, folder: Path, unit: str, scale: f
     return save(ax.figure, folder / "residual_vs_time.png"), "Residual (measured − model) against time."
 
 
-def _common_figures(diagnosis, folder: Path, unit: str, scale: float) -> list:
-    """Residual vs time of every step and the error of every step against the noise floor."""
+def _error_fall(diagnosis, folder: Path, unit: str, scale: float) -> tuple:
+    """The error of every step against the noise floor."""
     kind, steps = diagnosis.kind, diagnosis.steps
-    out = [_residual_vs_time(diagnosis.measurement, [(step_label(s), s.fit) for s in steps], folder, unit, scale)]
     ax = new_figure((7, 4)).subplots()
     keys = list(kind.fit_errors(steps[0].fit))
     x = np.arange(len(steps))
@@ -374,8 +370,7 @@ def _common_figures(diagnosis, folder: Path, unit: str, scale: float) -> list:
     ax.set_xticks(x, [step_label(s) for s in steps], rotation=15, fontsize=8)
     ax.set(ylabel=f"error [{unit}]", yscale="log", title="error after each step")
     ax.legend(fontsize=8)
-    out.append((save(ax.figure, folder / "error_fall.png"), "The error of every step's model against the noise floor."))
-    return out
+    return save(ax.figure, folder / "error_fall.png"), "The error of every step's model against the noise floor."
 
 
 def diagnosis_page(diagnosis, folder, summary: dict, scale_numbers) -> Path:
@@ -399,7 +394,6 @@ def diagnosis_page(diagnosis, folder, summary: dict, scale_numbers) -> Path:
         ``index.html``.
     """
     folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
     kind = diagnosis.kind
     unit, scale = kind.report_unit
     d = {**diagnosis.to_json(), **summary}
@@ -425,12 +419,13 @@ def diagnosis_page(diagnosis, folder, summary: dict, scale_numbers) -> Path:
         page.text("Final model:").bullets(d["findings"]["final"])
     w = d["whiteness"]
     page.text(f"Ljung–Box Q = {w['ljung_box_q']:.1f}, p = {w['p_value']:.3g}." if "ljung_box_q" in w else "")
-    _parameters(page, d.get("final") or {}, kind, diagnosis.final.fit)
+    _parameters(page, d["final"], kind, diagnosis.final.fit)
     _predictions(page, kind, diagnosis.final.fit, scale_numbers, diagnosis.whiteness)  # the verdict's
     for heading, head_rows in kind.report_sections(diagnosis, d):
         page.heading(heading).table(*head_rows)
-    figures = _common_figures(diagnosis, folder, unit, scale)
-    figures[1:1] = kind.report_figures(diagnosis, folder, scale_numbers)
+    fits = [(step_label(step), step.fit) for step in diagnosis.steps]
+    figures = [_residual_vs_time(diagnosis.measurement, fits, folder, unit, scale)]
+    figures += kind.report_figures(diagnosis, folder, scale_numbers) + [_error_fall(diagnosis, folder, unit, scale)]
     return _close(page, figures, diagnosis.measurement, folder)
 
 
@@ -440,7 +435,6 @@ def fit_page(result, folder, summary: dict, kind, scale_numbers=None) -> Path:
     time and the kind's figures of a fit (`TestKind.fit_figures`), and how to reproduce it.
     Returns ``index.html``."""
     folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
     unit, scale = kind.report_unit
     meas = result.measurement
     floor = summary.get(_floor_key(kind)) or (summary.get("whiteness") or {}).get(_floor_key(kind))
