@@ -167,8 +167,7 @@ def diagnosis_confidence(meas, steps: list, masks: list, one_rate: bool, thresho
                     if other in step.effects:
                         chosen &= ~mine
                     elif other in fams:
-                        j = fams.index(other)
-                        chosen &= ~(mine & explains_as_well(S[i], np.array(scores)[j], thresholds))
+                        chosen &= ~(mine & explains_as_well(S[i], scores[fams.index(other)], thresholds))
             probabilities = {c.family: float(np.mean(chosen & (best == i))) for i, c in enumerate(cands)}
             # a family's figure is from its last round as a candidate: the round that
             # added it (it is no candidate afterwards), else the round the procedure stopped
