@@ -119,8 +119,7 @@ class BenchDiagnosis:
     report_path: Path | None = None
 
     def __getattr__(self, name):
-        # everything else of the engine's result (added, ranking, steps, whiteness, table …)
-        if name == "diagnosis":
+        if name == "diagnosis":  # not set yet (a copy or an unpickled object being built): no endless recursion
             raise AttributeError(name)
         return getattr(self.diagnosis, name)
 
