@@ -329,9 +329,8 @@ def load_fitted(path) -> HarmonicDrive:
 def result_of(ev: Evaluator, prob: FitProblem, unit: str = "") -> FitResult:
     """Evaluate a finished problem once more and package it as a `FitResult`."""
     internal = {k: float(np.asarray(v).reshape(-1)[0]) for k, v in prob.phys(prob.u[None, :]).items()}
-    updates = {k: float(np.asarray(v).reshape(-1)[0]) for k, v in prob.updates(prob.u[None, :]).items()} \
-        if prob.names else {}
-    model = prob.model.with_updates(updates) if updates else prob.model
+    updates = {k: float(np.asarray(v).reshape(-1)[0]) for k, v in prob.updates(prob.u[None, :]).items()}
+    model = prob.model.with_updates(updates)
     # the optimiser keeps the twist of the point it ended on: evaluating it again would
     # cost a whole pass over the record per fit (a fifth of a diagnosis)
     twist = prob.twist_at_u if prob.twist_at_u is not None else ev.twist(model)
@@ -340,7 +339,7 @@ def result_of(ev: Evaluator, prob: FitProblem, unit: str = "") -> FitResult:
         # optimiser's trials are given; the result is evaluated once, so it may take them
         twist = ev.twist(model, max_iter=RESULT_NEWTON_ITERATIONS)
     if not np.all(np.isfinite(twist)):
-        raise SolverError(f"the model {', '.join(prob.names) or 'structure'} cannot be evaluated on "
+        raise SolverError(f"the model {', '.join(prob.names)} cannot be evaluated on "
                           f"this record: {prob.message or 'the torque balance has no solution'}")
     r_rows, full, coef = residuals(ev, prob, twist)
     if prob.nested is not None and prob.nested.r is not None:  # the optimiser never ends above it
@@ -369,7 +368,7 @@ def result_of(ev: Evaluator, prob: FitProblem, unit: str = "") -> FitResult:
                      uncertainty=unc, offset=offset, prediction=prediction, residual=full[0],
                      rows=prob.rows.copy(), n_params=len(prob.names) + prob.basis.shape[1],
                      ke_coefficients=linear, iterations=prob.iterations, unit=unit or prob.model.name,
-                     internal=internal, derived=derived, converged=prob.message.startswith(("converged", "nothing")),
+                     internal=internal, derived=derived, converged=prob.message.startswith("converged"),
                      message=prob.message, coordinates=coordinates)
 
 
@@ -400,8 +399,8 @@ class FittedCoordinates:
 
 
 def fitted_coordinates(prob: FitProblem, cov) -> FittedCoordinates | None:
-    """`FittedCoordinates` of a finished problem, None without a covariance or parameters."""
-    if cov is None or not prob.names:
+    """`FittedCoordinates` of a finished problem, None without a covariance."""
+    if cov is None:
         return None
     k = prob.u.size
     bare = dataclasses.replace(prob, rows=prob.rows[:0], basis=prob.basis[:0], J=None, r=None, twist_at_u=None,

@@ -87,9 +87,8 @@ def fit_many(ev: Evaluator, problems: list[FitProblem], *, tol: float = 1e-3, lo
         ticks += 1
         row = 0
         for p, first, steps, U, trials in requests:
-            size = U.shape[0] if p.names else 1
-            block = twist[row:row + size]
-            row += size
+            block = twist[row:row + U.shape[0]]
+            row += U.shape[0]
             r_rows = row_residuals(ev, p, block)
             if _takes_nested(p, first):
                 _hold_nested(p, r_rows[-1], block[-1])
@@ -163,9 +162,7 @@ def _update(p: FitProblem, r_rows: np.ndarray, has_base: bool, steps, trials, to
         J = ((r_rows[1:1 + k] - base) / steps[:, None]).T
         # a column the evaluator could not solve carries no slope (a NaN would make every step NaN)
         p.J = np.where(np.isfinite(J), J, 0.0)
-        if k == 0:
-            p.done, p.message = True, "nothing to fit: the linear part is solved exactly"
-        elif p.nested is not None and p.nested.kept:
+        if p.nested is not None and p.nested.kept:
             p.done, p.message = True, (f"converged: kept the fitted model it contains ({', '.join(p.nested.families)} "
                                        "neutral); the fit from its start ended above it")
         return

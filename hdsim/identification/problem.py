@@ -366,8 +366,6 @@ class FitProblem:
         return out
 
     def batch_model(self, U: np.ndarray) -> HarmonicDrive:
-        if not self.names:
-            return self.model
         return self.model.with_updates(self.updates(U))
 
     @functools.cached_property
