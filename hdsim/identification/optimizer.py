@@ -54,7 +54,7 @@ def row_residuals(ev: Evaluator, prob: FitProblem, twist: np.ndarray) -> np.ndar
     return target - (target @ prob.basis_pinv.T) @ _on_rows(prob, prob.basis.T)
 
 
-def fit_many(ev: Evaluator, problems: list[FitProblem], *, tol: float = 1e-3, log=None) -> int:
+def fit_many(ev: Evaluator, problems: list[FitProblem], *, tol: float = 1e-3) -> int:
     """Run the Levenberg–Marquardt fits of ``problems`` in lockstep (in place).
 
     A fit stops after two iterations in a row that lower its cost by less than ``tol``
@@ -97,8 +97,6 @@ def fit_many(ev: Evaluator, problems: list[FitProblem], *, tol: float = 1e-3, lo
             if p.done:
                 _keep_nested(p)
         pending = [p for p in pending if not p.done]
-        if log:
-            log(f"pass {ticks}: {len(pending)} fits still running")
     return ticks
 
 

@@ -78,13 +78,10 @@ def loading_slope(meas: Measurement, lo: float = 0.1, hi: float = 0.5) -> float:
     return 1.0 / slope if slope > 0 else float("nan")
 
 
-def zero_torque_signatures(meas: Measurement) -> dict:
-    """Loop width and step at zero torque [rad], median |dT/dt| [N·m/s]."""
-    return dict(_zero_torque_signatures(meas))
-
-
 @functools.lru_cache(maxsize=16)  # a diagnosis asks once per candidate and fold: same records
-def _zero_torque_signatures(meas: Measurement) -> dict:
+def zero_torque_signatures(meas: Measurement) -> dict:
+    """Loop width and step at zero torque [rad], median |dT/dt| [N·m/s] (cached: read, never
+    change, the dict it returns)."""
     T = np.asarray(meas.torque, dtype=float)
     y = relative_angle(meas)
     Tmax = max(np.max(np.abs(T)), 1e-12)
@@ -391,13 +388,13 @@ def other_starts(model: HarmonicDrive, meas: Measurement) -> list[dict]:
 
 
 def make_problem(model: HarmonicDrive, meas: Measurement, ev: Evaluator, rows=None, start: dict | None = None,
-                 label: str = "", context: FitContext | None = None, max_iter: int = FitProblem.max_iter) -> FitProblem:
+                 label: str = "", max_iter: int = FitProblem.max_iter) -> FitProblem:
     """The fit of ``model`` to ``meas``: K0 plus each effect's free parameters.
 
     ``start`` overrides start values by name (``stiffness.K0``, ``family.parameter``);
     ``max_iter`` caps the optimiser's iterations.
     """
-    context = context or fit_context(meas, model)
+    context = fit_context(meas, model)
     start = start or {}
     names, transforms, values = [K0_NAME], [_k0_transform(model)], [context.stiffness]
     for family in SLOTS:
