@@ -29,8 +29,7 @@ import numpy as np
 from hdsim.identification.problem import Evaluator, FitProblem
 
 __all__ = ["fit_many", "residuals", "bic", "lag1", "effective_n", "uncertainty", "FittedRows", "check_nested",
-           "reproduces_contained", "judge_nested",
-           "NESTING_TOLERANCE"]
+           "judge_nested", "NESTING_TOLERANCE"]
 
 
 def _on_rows(prob: FitProblem, a: np.ndarray) -> np.ndarray:
@@ -203,6 +202,11 @@ def _update(p: FitProblem, r_rows: np.ndarray, has_base: bool, steps, trials, to
 NESTING_TOLERANCE = 1e-6
 
 
+def _no_worse(cost: float, baseline_cost: float) -> bool:
+    """``cost`` at most ``baseline_cost`` within `NESTING_TOLERANCE` (False for NaN)."""
+    return cost <= baseline_cost * (1.0 + NESTING_TOLERANCE) + 1e-300
+
+
 def check_nested(candidate_cost: float, baseline_cost: float, label: str = "") -> None:
     """Raise `RuntimeError` (an internal error) when a fit ends worse than a model it contains.
 
@@ -213,44 +217,35 @@ def check_nested(candidate_cost: float, baseline_cost: float, label: str = "") -
     label : str
         What was fitted, for the message.
     """
-    if not candidate_cost <= baseline_cost * (1.0 + NESTING_TOLERANCE) + 1e-300:
+    if not _no_worse(candidate_cost, baseline_cost):
         raise RuntimeError(f"internal error: the fit of {label or 'a model'} ended at RSS {candidate_cost:.9g}, "
                            f"above the {baseline_cost:.9g} of the model it contains (by "
                            f"{candidate_cost / max(baseline_cost, 1e-300) - 1.0:.3g} relative; at most "
                            f"{NESTING_TOLERANCE:g})")
 
 
-def reproduces_contained(fit, baseline_cost: float) -> bool:
-    """Whether ``fit`` can be judged against ``baseline_cost``, the cost the model it contains
-    was fitted at. It can when it ends at or below it, or when its structure gives that model
-    the same cost (``fit.contained_cost`` within `NESTING_TOLERANCE`): `check_nested` then
-    holds it to never ending above. It cannot when it ends above and its structure gives the
-    contained model a higher cost: the evaluator's own error on the record exceeds its
-    noise (a zero gap or a zero damping changes the path the quasi-static evaluator takes,
-    and on a nearly noise-free record the micro-slip friction's twist moves by ~1e-6 rad).
-    """
-    if fit.rss <= baseline_cost * (1.0 + NESTING_TOLERANCE) + 1e-300:
-        return True  # nothing to explain: a candidate is judged whatever its structure's path
-    contained = getattr(fit, "contained_cost", None)
-    return contained is None or contained <= baseline_cost * (1.0 + NESTING_TOLERANCE) + 1e-300
-
-
 def judge_nested(candidate, fit, baseline_cost: float, label: str) -> bool:
     """Hold ``fit`` (a fit of ``candidate``'s model) to its contained model's ``baseline_cost``:
-    False, with ``candidate`` marked not judged, when it cannot be judged
-    (`reproduces_contained`); else True, once `check_nested` has found it no worse."""
-    if not reproduces_contained(fit, baseline_cost):
-        candidate.accepted, candidate.reason = False, not_judged_reason(fit, baseline_cost)
-        return False
-    check_nested(fit.rss, baseline_cost, label)
-    return True
+    True once `check_nested` has found it no worse, when it can be judged; else False, with
+    ``candidate`` marked not judged.
 
-
-def not_judged_reason(fit, baseline_cost: float) -> str:
-    """Why a candidate that does not reproduce its baseline (`reproduces_contained`) is not judged."""
-    excess = fit.contained_cost / max(baseline_cost, 1e-300) - 1.0
-    return (f"not judged: in this form the model it contains costs {100 * excess:.3g} % more than it was "
-            "fitted at (the evaluator's resolution on this record is coarser than its noise)")
+    It can be judged when it ends at or below ``baseline_cost`` (nothing to explain: whatever
+    its structure's path), or when its structure gives the contained model the same cost
+    (``fit.contained_cost`` within `NESTING_TOLERANCE`): `check_nested` then holds it to never
+    ending above. It cannot when it ends above and its structure gives the contained model a
+    higher cost: the evaluator's own error on the record exceeds its noise (a zero gap or a
+    zero damping changes the path the quasi-static evaluator takes, and on a nearly
+    noise-free record the micro-slip friction's twist moves by ~1e-6 rad).
+    """
+    contained = getattr(fit, "contained_cost", None)
+    if _no_worse(fit.rss, baseline_cost) or contained is None or _no_worse(contained, baseline_cost):
+        check_nested(fit.rss, baseline_cost, label)
+        return True
+    excess = contained / max(baseline_cost, 1e-300) - 1.0
+    candidate.accepted = False
+    candidate.reason = (f"not judged: in this form the model it contains costs {100 * excess:.3g} % more than it "
+                        "was fitted at (the evaluator's resolution on this record is coarser than its noise)")
+    return False
 
 
 class FittedRows:
