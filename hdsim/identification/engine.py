@@ -119,10 +119,7 @@ class Diagnosis:
         diagnosis then replaced, and their order says which family imitates that shape
         best, not which is missing. The superseded rounds stay in ``rounds`` and ``reshaped``.
         """
-        for k, step in enumerate(self.steps):
-            if step.candidates and step.reshaped is None:
-                return k + 1
-        return 1
+        return next((k + 1 for k, step in enumerate(self.steps) if step.candidates and step.reshaped is None), 1)
 
     @property
     def ranking(self) -> list:
@@ -204,9 +201,8 @@ def run_diagnosis(kind, session, pool: list, *, max_rounds: int | None = None, l
     """Greedy forward selection over ``pool`` on ``session``'s record, decided round by round
     by `decide_round` with ``kind``'s thresholds.
 
-    ``session`` fits and scores (`hdsim.identification.test_kinds.Session`): ``baseline()``,
-    ``entry_forms(family)``, ``try_models(step, trials, residual)``, ``other_forms(current,
-    done)``, ``explained(step)``; its ``one_rate``, ``fold_rule`` and ``passes``.
+    ``session`` fits and scores (`hdsim.identification.test_kinds.TestKind.session`; the
+    module text of `hdsim.identification.test_kinds` lists what the engine reads of it).
     """
     t0 = time.perf_counter()
     say = log or (lambda *_: None)
@@ -288,16 +284,14 @@ def _settle_stand_in(steps: list, reshaped: list, ambiguous: list) -> tuple[list
     A stand-in that stays is named in its pair's entry.
     """
     held = next((k for k, s in enumerate(steps) if s.provisional is not None), None)
-    if held is None:
-        return steps, reshaped, ambiguous
-    if not any(s.added for s in steps[held:]):
+    if held is not None and not any(s.added for s in steps[held:]):
         steps = steps[:held + 1]
         steps[held].provisional = None
         reshaped = [r for r in reshaped if r["round"] <= held]
         ambiguous = [a for a in ambiguous if a["round"] <= held + 1]
-        return steps, reshaped, ambiguous
-    entry = next(a for a in ambiguous if a["round"] == held + 1 and a["added"] is False)
-    entry["provisional"] = steps[held].provisional
+    elif held is not None:
+        entry = next(a for a in ambiguous if a["round"] == held + 1 and a["added"] is False)
+        entry["provisional"] = steps[held].provisional
     return steps, reshaped, ambiguous
 
 

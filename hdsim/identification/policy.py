@@ -226,15 +226,11 @@ def rate_ambiguity(best, ranked: list, state: RoundState, thresholds: Thresholds
     cannot decide between them.
     """
     partner = state.rate_partner(best.family)
-    if not partner:
-        return None
-    pair = tuple(sorted((best.family, partner)))
-    if partner in state.current:
-        return pair
     rival = next((c for c in ranked if c.family == partner), None)
-    if rival is None or not explains_as_well(best.score, rival.score, thresholds):
-        return None
-    return pair
+    if partner and (partner in state.current
+                    or rival is not None and explains_as_well(best.score, rival.score, thresholds)):
+        return tuple(sorted((best.family, partner)))
+    return None
 
 
 def rate_question_left(ranked: list, state: RoundState, thresholds: Thresholds) -> tuple | None:
