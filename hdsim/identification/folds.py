@@ -78,6 +78,7 @@ def folds(meas: Measurement) -> tuple[list[np.ndarray], str]:
             masks = [block % 2 == 0, block % 2 == 1]
             return masks, "alternate blocks of ten wave-generator revolutions"
     legs, rates = _legs(meas)
+    halves = [np.arange(n) < n // 2, np.arange(n) >= n // 2], "first and second half of the time"
     masks = [np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)]
     classes = np.zeros(len(legs), dtype=int)
     if len(legs) >= 2 and np.min(rates) > 0 and np.max(rates) / np.min(rates) > 1.5:
@@ -101,8 +102,7 @@ def folds(meas: Measurement) -> tuple[list[np.ndarray], str]:
             masks[int(i >= half)][a:b] = True
         how = "first and second half of the loading legs"
     else:
-        masks = [np.arange(n) < n // 2, np.arange(n) >= n // 2]
-        how = "first and second half of the time"
+        masks, how = halves
     # rows outside any leg go to the nearer fold in time
     rest = ~(masks[0] | masks[1])
     if np.any(rest):
@@ -112,8 +112,7 @@ def folds(meas: Measurement) -> tuple[list[np.ndarray], str]:
             d1 = np.min(np.abs(owner1 - i)) if owner1.size else np.inf
             masks[int(d1 < d0)][i] = True
     if min(m.sum() for m in masks) < 10:
-        masks = [np.arange(n) < n // 2, np.arange(n) >= n // 2]
-        how = "first and second half of the time"
+        masks, how = halves
     return masks, how
 
 

@@ -146,10 +146,7 @@ def order_spectrum(angle, r, max_order: float = 8.0, n_orders: int = 800):
     angle = np.asarray(angle, dtype=float)
     r = np.asarray(r, dtype=float) - np.mean(r)
     orders = np.linspace(max_order / n_orders, max_order, n_orders)
-    amp = np.empty_like(orders)
-    for i, k in enumerate(orders):
-        amp[i] = math.hypot(*_sine_fit(angle, r, k))
-    return orders, amp
+    return orders, np.array([math.hypot(*_sine_fit(angle, r, k)) for k in orders])
 
 
 def _sine_fit(angle, r, k):
