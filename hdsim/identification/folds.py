@@ -65,7 +65,8 @@ def folds(meas: Measurement) -> tuple[list[np.ndarray], str]:
 
     Whole cycles of the torque (pairs of legs), alternated between the folds within each
     loading rate (legs whose rates differ by more than 1.5× are two rates), so that each
-    fold holds every rate with a cycle to spare whatever the profile's structure;
+    fold holds every rate with a cycle to spare however unequal the rates' shares of the
+    record (one slow cycle and ten fast ones), and a drift or a warm-up is shared alike;
     a record of less than two cycles is split into the first and the second half of its
     legs (or of its time, when there are fewer than two legs).
     """
@@ -75,17 +76,13 @@ def folds(meas: Measurement) -> tuple[list[np.ndarray], str]:
         # identified): alternate blocks of ten wave-generator revolutions
         block = (_wg_travel(meas) // (KE_FOLD_REVOLUTIONS * 2 * np.pi)).astype(int)
         if block.max() >= 3:
-            masks = [block % 2 == 0, block % 2 == 1]
-            return masks, "alternate blocks of ten wave-generator revolutions"
+            return [block % 2 == 0, block % 2 == 1], "alternate blocks of ten wave-generator revolutions"
     legs, rates = _legs(meas)
     halves = [np.arange(n) < n // 2, np.arange(n) >= n // 2], "first and second half of the time"
     masks = [np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)]
     classes = np.zeros(len(legs), dtype=int)
     if len(legs) >= 2 and np.min(rates) > 0 and np.max(rates) / np.min(rates) > 1.5:
         classes = (np.asarray(rates) > math.sqrt(np.min(rates) * np.max(rates))).astype(int)
-    # whole cycles (pairs of legs), alternated within each loading rate: both folds then
-    # hold every rate that has a cycle to spare, however unequal the rates' shares of the
-    # record (one slow cycle and ten fast ones), and a drift or a warm-up is shared alike
     T = np.asarray(meas.torque, dtype=float)
     cycles = [_cycles([leg for leg, k in zip(legs, classes) if k == c], T) for c in sorted(set(classes.tolist()))]
     if sum(len(group) for group in cycles) >= 2:

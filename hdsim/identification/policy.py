@@ -2,9 +2,9 @@
 
 `decide_round` is the whole policy of a round as one pure function of the scored
 candidates: it fits nothing, reads no record and changes nothing, so every rule can be
-checked on hand-built candidate lists (``tests/test_policy.py``). The procedure that
-fits the candidates and applies the decision is `hdsim.identification.diagnosis`; the
-reasoning behind each rule is in its module text and in
+checked on hand-built candidate lists (``tests/test_policy.py``). The loop that fits the
+candidates and applies the decision is `hdsim.identification.engine`; the reasoning behind
+each rule is in the module text of `hdsim.identification.diagnosis` and in
 ``docs/tutorial-find-missing-effect.md``.
 
 A candidate here is anything with ``family``, ``effect``, ``score`` (lower is better),
@@ -149,8 +149,7 @@ def wants_other_forms(ranked: list, has_other_forms: bool, state: RoundState) ->
     been added nor changed and a residual is left, also when none passes: the user names
     families, not forms, and the form of a named family may hide the missing one.
     """
-    best = next((c for c in ranked if c.accepted), None)
-    return has_other_forms and (best is not None or state.on_baseline)
+    return has_other_forms and (any(c.accepted for c in ranked) or state.on_baseline)
 
 
 def decide_round(ranked: list, reshapes: list | None, state: RoundState, thresholds: Thresholds) -> Decision:
