@@ -247,9 +247,8 @@ def findings(meas, residual, max_items: int = 5, floor: float | None = None) -> 
         split = math.sqrt(groups[0] * groups[-1])
         fast, slow = leg_rate > split, (leg_rate > 0) & (leg_rate < split)
         if np.count_nonzero(fast) > 10 and np.count_nonzero(slow) > 10:
-            w_fast, w_slow = _loop_width(fast, direction, r), _loop_width(slow, direction, r)
-            if np.isfinite(w_fast) and np.isfinite(w_slow):
-                diff = w_fast - w_slow
+            diff = _loop_width(fast, direction, r) - _loop_width(slow, direction, r)
+            if np.isfinite(diff):
                 out.append((abs(diff), f"the residual loop is {arcsec(diff)} "
                                        f"{'wider' if diff > 0 else 'narrower'} at the fast loading "
                                        f"rate than at the slow one: rate-dependent loss (damping)"))
