@@ -19,7 +19,6 @@ import hdsim
 from hdsim.errors import InputError
 from hdsim.identification.engine import Candidate, Step
 from hdsim.identification.policy import Thresholds
-from hdsim.identification.residuals import whiteness
 from hdsim.identification.test_kinds import (FamilyKnowledge, TestKind, register_test_kind, test_kind,
                                              unregister_test_kind)
 from hdsim.io.measurement import make_measurement
@@ -87,9 +86,6 @@ class CurveSession:
                                  accepted=ok, reason="passes" if ok else "too little",
                                  figures={"rmse_rad": fit.rmse_rad}))
         return out
-
-    def explained(self, step):
-        return whiteness(step.fit.residual)
 
     def confidence(self, steps):
         return {}

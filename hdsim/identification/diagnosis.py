@@ -322,11 +322,6 @@ class TwistSession:
             scored.append(candidate)
         return scored
 
-    def explained(self, step: Step) -> dict:
-        if "whiteness" not in step.memo:
-            step.memo["whiteness"] = self.kind.residual_whiteness(step.fit)
-        return step.memo["whiteness"]
-
     def confidence(self, steps: list) -> dict:
         return diagnosis_confidence(self.measurement, steps, self.masks, self.one_rate, self.kind.thresholds,
                                     self.kind.rate_partner)

@@ -197,6 +197,14 @@ class Diagnosis:
         return out
 
 
+def _whiteness(kind, step: Step) -> dict:
+    """The kind's judgement of a step's residual (`TestKind.residual_whiteness`), worked out
+    once per step: each round's stop and proxy guard and the final verdict read it."""
+    if "whiteness" not in step.memo:
+        step.memo["whiteness"] = kind.residual_whiteness(step.fit)
+    return step.memo["whiteness"]
+
+
 def run_diagnosis(kind, session, pool: list, *, max_rounds: int | None = None, log=None) -> Diagnosis:
     """Greedy forward selection over ``pool`` on ``session``'s record, decided round by round
     by `decide_round` with ``kind``'s thresholds.
@@ -216,7 +224,7 @@ def run_diagnosis(kind, session, pool: list, *, max_rounds: int | None = None, l
         todo = [f for f in pool if f not in current and f not in undecidable]
         if not todo or (max_rounds is not None and len(added) >= max_rounds):
             break
-        residual = session.explained(step)  # once a round: the stop and the guard read it
+        residual = _whiteness(kind, step)  # the stop and the guard read it
         if kind.stop_when_white and residual["white"]:
             break
         state = RoundState(round_no=len(steps), current=dict(current), added=tuple(added),
@@ -261,7 +269,7 @@ def run_diagnosis(kind, session, pool: list, *, max_rounds: int | None = None, l
     step = steps[-1]
     # one noise floor on the page: the final model's (its white residual), which the summary
     # states, is also the one both steps' findings are read against
-    whiteness = session.explained(step)
+    whiteness = _whiteness(kind, step)
     return Diagnosis(kind=kind, measurement=session.measurement, steps=steps, added=added, ambiguous=ambiguous,
                      reshaped=reshaped, fold_rule=session.fold_rule, whiteness=whiteness,
                      seconds=time.perf_counter() - t0, passes=session.passes,

@@ -260,13 +260,6 @@ class FitResult(FittedRows):
                 "# [parameters] table holds dotted overrides of the unit, in SI units.\n")
         return head + tomli_w.dumps(doc)
 
-    def save(self, path) -> Path:
-        from hdsim.atomic import write_text_atomic
-
-        path = Path(path)
-        write_text_atomic(path, self.to_toml())
-        return path
-
 
 def load_fitted(path) -> HarmonicDrive:
     """A `HarmonicDrive` from a file written by `FitResult.save`."""

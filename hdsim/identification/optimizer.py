@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 from types import MappingProxyType
 
 import numpy as np
@@ -267,6 +268,14 @@ class FittedRows:
     @property
     def n(self) -> int:
         return int(np.count_nonzero(self.rows))
+
+    def save(self, path) -> Path:
+        """Write the fit's file (its ``to_toml``) to ``path`` atomically; returns the path."""
+        from hdsim.atomic import write_text_atomic
+
+        path = Path(path)
+        write_text_atomic(path, self.to_toml())
+        return path
 
 
 def bic(rss: float, n: float, k: int) -> float:

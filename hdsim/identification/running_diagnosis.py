@@ -264,11 +264,6 @@ class RunningSession:
                 out.append(Candidate.failed(family, effect_id, str(exc)))
         return out
 
-    def explained(self, step: Step) -> dict:
-        if "whiteness" not in step.memo:
-            step.memo["whiteness"] = _explained(step.fit)
-        return step.memo["whiteness"]
-
     def confidence(self, steps) -> dict:
         return {}
 

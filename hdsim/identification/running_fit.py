@@ -29,7 +29,6 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass, field, replace
-from pathlib import Path
 
 import numpy as np
 
@@ -181,14 +180,6 @@ class TorqueFit(FittedRows):
         """``n_eff ln(RSS/n) + k ln n_eff``: the BIC with the residual's effective sample count."""
         n_eff = self.n_eff if n_eff is None else n_eff
         return n_eff * math.log(max(self.rss, 1e-300) / max(self.n, 1)) + self.n_params * math.log(n_eff)
-
-    def save(self, path) -> Path:
-        """Write the fit's file (``to_toml``) to ``path``; returns the path."""
-        from hdsim.atomic import write_text_atomic
-
-        path = Path(path)
-        write_text_atomic(path, self.to_toml())
-        return path
 
 
 @dataclass

@@ -20,7 +20,8 @@ A session (`TestKind.session`) is the kind's state for one record. The engine re
 ``measurement``, ``chosen`` (family -> effect id of the baseline), ``one_rate``,
 ``fold_rule``, ``passes``, and calls ``baseline()``, ``entry_forms(family)``,
 ``try_models(step, trials, residual)``, ``other_forms(current, done)``,
-``explained(step)``, ``confidence(steps)`` and ``findings(step)``.
+``confidence(steps)`` and ``findings(step)``; a step's residual is judged by the kind's
+``residual_whiteness``.
 """
 
 from __future__ import annotations
