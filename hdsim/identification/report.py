@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from hdsim.identification.problem import relative_angle
 from hdsim.identification.report_page import new_figure, save, step_label
 from hdsim.identification.residuals import order_spectrum, views
 from hdsim.units import ARCSEC_PER_RAD
@@ -28,11 +29,6 @@ __all__ = ["twist_figures", "twist_fit_figure", "FIGURES"]
 
 FIGURES = ("residual_vs_time.png", "measured_vs_model.png", "residual_vs_torque.png",
            "residual_spectrum.png", "residual_vs_rate.png", "error_fall.png")
-
-
-def _x(meas):
-    """Angle relative to the kinematic ideal [rad] (stiffness test: the angle itself)."""
-    return meas.kinematic_error if meas.wg_driven else np.asarray(meas.angle, dtype=float)
 
 
 def _by_direction(ax, T, meas, residual) -> None:
@@ -57,7 +53,7 @@ def twist_figures(diagnosis, folder) -> list[tuple[Path, str]]:
 
     # measured vs model
     ax = new_figure((7, 4.5)).subplots()
-    y = _x(meas)
+    y = relative_angle(meas)
     ax.plot(T, (y - first.fit.offset) * arcsec, ".", ms=2, color="0.6", label="measured")
     # each distinct model on the axis of `_x`, less the first offset [arcsec]: drawn whole and in the inset
     models = [(step.fit.prediction - ideal - first.fit.offset) * arcsec for step in ends]
@@ -160,7 +156,7 @@ def twist_fit_figure(result, folder) -> tuple[Path, str]:
     driven = meas.wg_driven
     T = np.asarray(meas.torque, dtype=float)
     x = np.degrees(np.asarray(meas.wg_angle, dtype=float) / meas.ratio) if driven else T
-    measured = _x(meas) - result.offset
+    measured = relative_angle(meas) - result.offset
     model = result.prediction - (np.asarray(meas.wg_angle) / meas.ratio if driven else 0) - result.offset
     fig = new_figure((7, 6))
     top, bottom = fig.subplots(2, 1, sharex=True)
