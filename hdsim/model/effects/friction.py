@@ -456,7 +456,8 @@ class DahlSlip(Friction):
         if not self.keeps_law_of(DahlSlip, _LAW + ("_law",)) or self.substeps != 8:
             return None
         from hdsim.model.effects import kernels
-        torque, reach, stiffness = (np.ravel(v)[0] for v in self._law(None))
+        # one row per sample of a batch (a scalar law serves every row)
+        torque, reach, stiffness = (np.ravel(v) for v in self._law(None))
         return (kernels.dahl_slip_step,), parameter_rows(size, torque, reach, stiffness, self.stop_rounding * reach)
 
     def free_parameters(self, context: FitContext):
