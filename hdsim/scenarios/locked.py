@@ -265,9 +265,10 @@ def quasistatic_criterion(model: HarmonicDrive, scenario):
     """Whether the quasi-static evaluator reproduces the dynamic one (`Setup.quasistatic_criterion`).
 
     It does when every ramp lasts `MIN_PERIODS_PER_RAMP` periods of the first mode
-    (`first_period`) and every metric group of the scenario is in `QUASISTATIC_GROUPS`.
-    Every friction, damping and hardening law runs in the quasi-static evaluator
-    (`hdsim.simulation.quasistatic`), so the laws do not enter.
+    (`first_period`), every metric group of the scenario is in `QUASISTATIC_GROUPS`, and
+    the friction law does not say otherwise for the cycle's peak torque
+    (`Friction.locked_quasistatic_limit`). Every friction, damping and hardening law runs in
+    the quasi-static evaluator (`hdsim.simulation.quasistatic`).
     """
     period = first_period(model, scenario.data["load"]["amplitude"])
     ramp = float(np.min(np.diff(scenario.times())))
@@ -280,6 +281,10 @@ def quasistatic_criterion(model: HarmonicDrive, scenario):
     if others:
         return False, (f"metric groups {others} read the twist at zero torque, where the quasi-static "
                        f"evaluator drops the dead zone's boundary layer"), figures
+    peak = scenario.data["load"]["amplitude"] * np.asarray(model.drive.rated_torque, dtype=float)
+    law = model.friction.locked_quasistatic_limit(peak)
+    if law:
+        return False, law, figures
     return True, (f"every ramp is at least {ramp / period:.3g} periods of the first mode ({period:.3g} s) "
                   f"and the metrics are read away from zero torque"), figures
 
