@@ -7,6 +7,7 @@ discovery tests on independent truth data are in ``test_diagnosis.py``.
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -484,3 +485,18 @@ def test_a_second_friction_start_escapes_the_basin_of_a_reversing_ke_run():
     _, _, with_second, single = basin.with_and_without(("two_rates_equal", 4))  # [arcsec]
     assert with_second < 8.0
     assert single > 2.5 * with_second  # 3.0x on this record
+
+
+def test_a_fit_on_another_units_record_reloads_as_the_drive_it_fitted(tmp_path):
+    """The record's rated torque (87 N·m) and ratio, which the fit puts on the unit, were not
+    written to the fit file: reloaded on the CSG-14-100 (10 N·m) the same fit gave another
+    stiffness law (K1 234,529 against 29,428 N·m/rad) and lost motion (0.017 against 0.156 arcmin)."""
+    import hdsim
+    from hdsim.identification.fit import load_fitted
+
+    meas = hdsim.load_measurement(Path(__file__).resolve().parents[1] / "docs" / "figures" / "tutorial_bench.csv")
+    result = hdsim.fit(meas, unit=hdsim.load_unit("CSG-14-100"))
+    reloaded = load_fitted(result.save(tmp_path / "fit.toml"))
+    for name in ("drive.rated_torque", "drive.ratio", "flexspline.h_c"):
+        assert float(np.ravel(reloaded.params()[name])[0]) == float(np.ravel(result.drive.params()[name])[0])
+    assert float(reloaded.drive.rated_torque) == 87.0

@@ -248,7 +248,11 @@ class FitResult(FittedRows):
             "test": self.measurement.test,
             "source": str(self.measurement.source),
             "effects": {f: getattr(self.model, f).id for f in SLOTS},
-            "parameters": summary["params"],
+            # the record's rated torque and ratio, which the fit put on the unit (`_unit_model`),
+            # travel with the fitted values: reloaded without them, a fit on another unit's
+            # record gave another stiffness law (its breakpoints scale with the rated torque)
+            "parameters": {**{name: float(np.ravel(self.model.params()[name])[0])
+                              for name in ("drive.rated_torque", "drive.ratio")}, **summary["params"]},
             "offset": {"angle_offset_rad": float(self.offset)},
             "uncertainty": {k: v for k, v in summary["uncertainty"].items() if v is not None},
             "fit": {key: summary[key] for key in ("rows", "rmse_rad", "max_abs_error_rad", "bic", "n_params")},
