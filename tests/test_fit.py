@@ -500,3 +500,22 @@ def test_a_fit_on_another_units_record_reloads_as_the_drive_it_fitted(tmp_path):
     for name in ("drive.rated_torque", "drive.ratio", "flexspline.h_c"):
         assert float(np.ravel(reloaded.params()[name])[0]) == float(np.ravel(result.drive.params()[name])[0])
     assert float(reloaded.drive.rated_torque) == 87.0
+
+
+@pytest.mark.parametrize("text, words", [
+    ('format = "hdsim-fit-1"\nunit = "CSG-25-100"\n', "an incomplete fit file: no effects, parameters"),
+    ('format = "hdsim-fit-1"\nunit = "CSG-25-100"\n[effects]\n[parameters]\n[bogus]\n', "unknown key in"),
+    ('format = "hdsim-fit-1"\nunit = "CSG-25-100"\n[effects]\nfriction = "dahl"\n[parameters]\n'
+     '"friction.torque_max" = 0.5\n"friction.sigmaa" = 1e6\n', "did you mean friction.sigma"),
+])
+def test_a_hand_edited_fit_file_is_refused_in_a_line_that_names_it(tmp_path, text, words):
+    """A truncated fit file had loaded as the stock unit with its default effects, an unknown
+    section was ignored, and a misspelt field said "friction.dahl needs sigma" without the file."""
+    from hdsim.errors import InputError
+    from hdsim.identification.fit import load_fitted
+
+    path = tmp_path / "edited.fit.toml"
+    path.write_text(text)
+    with pytest.raises(InputError) as caught:
+        load_fitted(path)
+    assert words in str(caught.value) and "edited.fit.toml" in str(caught.value)

@@ -581,7 +581,8 @@ def test_set_of_an_integer_key_to_digits_int_cannot_read_is_refused(text):
     ({"unit": 5}, "unit must be a unit name"),  # TypeError in load_unit
 ])
 def test_fitted_model_file_of_the_wrong_shape_is_refused(tmp_path, doc, match):
-    (tmp_path / "m.fit.toml").write_text(tomli_w.dumps({"format": "hdsim-fit-1", "unit": "CSG-25-100", **doc}))
+    whole = {"format": "hdsim-fit-1", "unit": "CSG-25-100", "effects": {}, "parameters": {}}  # each key a fit writes
+    (tmp_path / "m.fit.toml").write_text(tomli_w.dumps({**whole, **doc}))
     with pytest.raises(InputError, match=match):
         load_fitted(tmp_path / "m.fit.toml")
 

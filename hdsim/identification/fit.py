@@ -265,6 +265,10 @@ class FitResult(FittedRows):
         return head + tomli_w.dumps(doc)
 
 
+#: the top-level keys of a fit file (`FitResult.to_toml`)
+FIT_FILE_KEYS = ("format", "unit", "test", "source", "effects", "parameters", "offset", "uncertainty", "fit", "drive")
+
+
 def load_fitted(path) -> HarmonicDrive:
     """A `HarmonicDrive` from a file written by `FitResult.save`."""
     from hdsim.model.catalog import load_unit
@@ -278,9 +282,18 @@ def load_fitted(path) -> HarmonicDrive:
                          "drive: paste its [input_friction] table into a driven scenario")
     if doc.get("format") != "hdsim-fit-1":
         raise InputError(f"{path}: not an hdsim fit file (format = 'hdsim-fit-1' expected)")
-    # the file may have been edited by hand: check its shape before using it
-    unit, effects, params = doc.get("unit"), doc.get("effects", {}), doc.get("parameters", {})
-    if unit is not None and not isinstance(unit, str):
+    # the file may have been edited by hand: check its shape before using it. A file missing
+    # what `FitResult.to_toml` always writes is refused, not read as the stock unit (a
+    # truncated file had loaded as the catalog drive with its default effects)
+    unknown = sorted(set(doc) - set(FIT_FILE_KEYS))
+    if unknown:
+        raise unknown_name(f"key in {path}", unknown[0], FIT_FILE_KEYS)
+    missing = [key for key in ("unit", "effects", "parameters") if key not in doc]
+    if missing:
+        raise InputError(f"{path}: an incomplete fit file: no {', '.join(missing)} (a file written by hdsim fit "
+                         "has unit, [effects] and [parameters])")
+    unit, effects, params = doc["unit"], doc["effects"], doc["parameters"]
+    if not isinstance(unit, str):
         raise InputError(f"{path}: unit must be a unit name, got {unit!r}")
     for table, value in (("effects", effects), ("parameters", params)):
         if not isinstance(value, dict):
@@ -308,8 +321,13 @@ def load_fitted(path) -> HarmonicDrive:
             continue
         cls = fx.effect_class(family, effect_id)
         current = getattr(model, family)
+        fields = list(cls.param_meta())
+        for key in params:  # a misspelt field had surfaced as "needs <field>", without the file
+            if key.startswith(family + ".") and key.split(".", 1)[1] not in fields:
+                raise unknown_name(f"parameter of {family}.{effect_id} in {path}", key,
+                                   [f"{family}.{f}" for f in fields])
         values = {}
-        for f in cls.param_meta():
+        for f in fields:
             key = f"{family}.{f}"
             if key in params:
                 values[f] = params.pop(key)
