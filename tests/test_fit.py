@@ -519,3 +519,15 @@ def test_a_hand_edited_fit_file_is_refused_in_a_line_that_names_it(tmp_path, tex
     with pytest.raises(InputError) as caught:
         load_fitted(path)
     assert words in str(caught.value) and "edited.fit.toml" in str(caught.value)
+
+
+def test_a_record_of_another_units_rated_torque_is_said():
+    """A fit of an 87 N·m record on the CSG-14-100 (10 N·m) put the record's rated torque on the
+    unit without a word; the check names both."""
+    import hdsim
+
+    meas = hdsim.load_measurement(Path(__file__).resolve().parents[1] / "docs" / "figures" / "tutorial_bench.csv")
+    said = {c["check"]: c for c in hdsim.fit(meas, unit="CSG-14-100").checks}
+    assert said["rated_torque_of_unit"]["status"] == "warn"
+    assert "87 N·m is not the CSG-14-100's 10 N·m" in said["rated_torque_of_unit"]["message"]
+    assert not any(name.endswith("_of_unit") for name in {c["check"] for c in hdsim.fit(meas).checks})

@@ -46,14 +46,14 @@ def test_a_count_just_off_a_whole_number_is_shown_as_it_was_given():
 def test_a_fit_file_value_that_is_no_number_is_refused_as_a_drive_file_refuses_it(value, told, tmp_path):
     """A string had stopped load_fitted with an internal TypeError; a list or true was taken."""
     path = tmp_path / "fitted.toml"
-    path.write_text(f'format = "hdsim-fit-1"\nunit = "CSG-25-100"\n[parameters]\n"wave_generator.balls" = {value}\n')
+    path.write_text(f'format = "hdsim-fit-1"\nunit = "CSG-25-100"\n[effects]\n[parameters]\n"wave_generator.balls" = {value}\n')
     with pytest.raises(InputError, match=rf"parameters.wave_generator.balls must be a number, got {re.escape(told)}"):
         load_fitted(path)
 
 
 def test_a_fit_file_with_a_ball_count_that_is_not_whole_is_refused(tmp_path):
     path = tmp_path / "fitted.toml"
-    path.write_text('format = "hdsim-fit-1"\nunit = "CSG-25-100"\n[parameters]\n"wave_generator.balls" = 20.5\n')
+    path.write_text('format = "hdsim-fit-1"\nunit = "CSG-25-100"\n[effects]\n[parameters]\n"wave_generator.balls" = 20.5\n')
     with pytest.raises(InputError, match="wave_generator.balls = 20.5 must be a whole number of balls"):
         load_fitted(path)
 

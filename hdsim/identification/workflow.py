@@ -25,7 +25,7 @@ from pathlib import Path
 from hdsim.identification import diagnosis as _builtin_kinds  # noqa: F401  (registers the built-in kinds)
 from hdsim.identification.outcome import assess
 from hdsim.identification.test_kinds import TestKind, test_kind
-from hdsim.io.data_checks import DriveScale, import_checks, wrong_test
+from hdsim.io.data_checks import DriveScale, import_checks, unit_checks, wrong_test
 from hdsim.io.decimation import thin_record
 from hdsim.errors import InputError
 from hdsim.io.measurement import Measurement, load_measurement
@@ -54,7 +54,7 @@ def _examine(meas: Measurement, scale: DriveScale) -> tuple:
     the record the kind prepared, so that what is fitted is prepared once."""
     kind = test_kind(meas.test)
     meas, turned = kind.prepare(meas)
-    imported = import_checks(meas)
+    imported = import_checks(meas) + unit_checks(meas, scale)
     logged = len(meas)
     meas, thinned = thin_record(meas) if kind.thinnable else (meas, [])  # a long log: one row in k
     checks, figures = kind.checks(meas, scale)

@@ -23,7 +23,7 @@ import numpy as np
 from hdsim.io.check import Check, constant_torque
 from hdsim.signals import breakaway_episodes, loading_rates, noise_level, rate_groups, torque_legs
 
-__all__ = ["DriveScale", "run_checks", "wrong_test", "import_checks", "slipping_starts", "twist_slope",
+__all__ = ["DriveScale", "run_checks", "wrong_test", "import_checks", "unit_checks", "slipping_starts", "twist_slope",
            "torque_sign_convention"]
 
 #: a locked drive twists at most this many times its softest catalog compliance predicts
@@ -454,3 +454,19 @@ def import_checks(meas) -> list[Check]:
         out.append(Check("time_axis", "warn", "no time column: time is the row index over the given sample "
                          "rate, so rate-dependent effects (damping) are not identifiable from this log"))
     return out
+
+
+def unit_checks(meas, drive: DriveScale) -> list[Check]:
+    """The record's rated torque and ratio (its header) against the drive it is fitted with:
+    a fit puts the record's on the drive, so a record of another unit changes the drive's
+    law (the hardening's breakpoints scale with the rated torque) and the user must see it."""
+    out = []
+    for key, given, unit, own in (("rated_torque", meas.rated_torque, "N·m", drive.rated_torque),
+                                  ("ratio", meas.ratio, "", drive.ratio)):
+        if given is not None and own and abs(float(given) / float(own) - 1.0) > 0.01:
+            out.append(Check(f"{key}_of_unit", "warn", f"the record's {key.replace('_', ' ')} {float(given):.4g}"
+                             f"{' ' + unit if unit else ''} is not the {drive.name}'s {float(own):.4g}"
+                             f"{' ' + unit if unit else ''}: the fit puts the record's on the drive (name the unit "
+                             "the record was made on, or correct the record's header)"))
+    return out
+
