@@ -3,14 +3,18 @@
 Every console block in README.md and docs/*.md that follows a ``hdsim demo`` or
 ``hdsim simulate …`` command is re-run here (in a temporary folder, the scenario paths
 pointing into this checkout) and each ``name  number`` line it shows is compared with the
-same line of the fresh output, to the digits the page prints. The Python example of the
-README and the home page (its ``# … arcmin`` comment) is run too. A change to the physics
-that moves a quoted figure fails here until the page is updated: a page cannot go stale.
+same line of the fresh output, to the digits the page prints. So is every command typed in
+a console block (``$ hdsim …``) with the lines the page shows under it: a figure to its
+digits, a JSON object key by key, any other line (an error, a table) as printed. The Python
+example of the README and the home page (its ``# … arcmin`` comment) is run too. A change
+to the physics that moves a quoted figure fails here until the page is updated: a page
+cannot go stale.
 """
 
 from __future__ import annotations
 
 import re
+import shutil
 from pathlib import Path
 
 import pytest
@@ -83,6 +87,130 @@ def test_a_console_block_of_the_docs_is_what_the_command_prints(command, shown, 
         label = label.strip()
         assert label in fresh, f"{command}: '{label}' is not printed any more"
         assert _agrees(number, fresh[label]), f"{command}: the page says {label} {number}, it prints {fresh[label]:.6g}"
+
+
+# --------------------------------------------------------------------------- commands typed in console blocks
+CONSOLE = re.compile(r"```console\n(.*?)```", re.DOTALL)
+#: a command typed at the prompt and the lines shown under it, up to the next prompt
+TYPED = re.compile(r"^\$ (hdsim\b[^\n]*)\n((?:(?!\$ )[^\n]*\n)*)", re.MULTILINE)
+#: typed commands whose output another test compares line by line
+CHECKED_ELSEWHERE = {"hdsim fit docs/figures/tutorial_bench.csv --effects friction": "test_docs_console.py",
+                     "hdsim diagnose docs/figures/tutorial_bench.csv --effects friction": "test_docs_console.py"}
+#: a run time, which no two runs share: "(4.9 s)", "(2600 elements, …, 0.11 s)"
+RUN_TIME = re.compile(r"\b\d+(?:\.\d+)? s\)")
+BENCH = "docs/figures/tutorial_bench.csv"
+
+
+def _typed_commands():
+    """Every ``$ hdsim …`` of a console block that shows what it prints (one shown without
+    output, as before a redirection or a long report, quotes nothing), less those
+    `CHECKED_ELSEWHERE`."""
+    out = []
+    for page in PAGES:
+        for block in CONSOLE.finditer(page.read_text(encoding="utf-8")):
+            for m in TYPED.finditer(block.group(1)):
+                if m.group(2).strip() and m.group(1) not in CHECKED_ELSEWHERE:
+                    out.append(pytest.param(page, m.group(1), m.group(2), id=f"{page.name}: $ {m.group(1)}"))
+    return out
+
+
+def _reader_folder(folder: Path, page: Path, command: str) -> None:
+    """What the typed commands read, where the page's reader has it: the checkout's scenario
+    files, the tutorial's bench file, and a drive file the page shows (``--unit NAME.toml``)."""
+    (folder / "scenarios").symlink_to(ROOT / "scenarios")
+    (folder / "docs" / "figures").mkdir(parents=True)
+    shutil.copy(ROOT / BENCH, folder / BENCH)
+    for name in re.findall(r"--unit (\S+\.toml)", command):
+        shown = re.search(rf"\(`{re.escape(name)}`\):\s*```toml\n(.*?)```", page.read_text(encoding="utf-8"),
+                          re.DOTALL)
+        assert shown, f"{page.name}: '{command}' reads {name}, which the page does not show"
+        (folder / name).write_text(shown.group(1), encoding="utf-8")
+
+
+def _typed(args, folder, capsys, monkeypatch):
+    """``(exit status, stdout, stderr)`` of ``hdsim ARGS`` in ``folder``; argparse's ``--help``
+    and its refusals end with SystemExit, which the shell sees as the status."""
+    from hdsim.cli import main
+
+    monkeypatch.chdir(folder)
+    capsys.readouterr()
+    try:
+        code = main(args)
+    except SystemExit as exc:
+        code = exc.code
+    printed = capsys.readouterr()
+    return code, printed.out, printed.err
+
+
+def _same_json(where: str, shown: list[str], out: str) -> None:
+    """A page's one-line JSON object, cut short with ``...``: the keys it shows are the first
+    printed, with the same values, each metric to the digits shown."""
+    import json
+
+    assert len(shown) == 1, f"{where}: a JSON example is one line"
+    page = json.loads(shown[0].replace(", ...}", "}"), parse_float=str)
+    printed = json.loads(out)
+    assert list(page) == list(printed)[:len(page)], f"{where}: the page shows keys {list(page)}, it prints {list(printed)}"
+    for key, value in page.items():
+        if key != "metrics":
+            assert value == printed[key], f"{where}: the page says {key} {value!r}, it prints {printed[key]!r}"
+            continue
+        assert list(value) == list(printed[key]), f"{where}: the page shows metrics {list(value)}, it prints {list(printed[key])}"
+        for name, number in value.items():
+            assert _agrees(number, printed[key][name]), \
+                f"{where}: the page says {name} {number}, it prints {printed[key][name]:.6g}"
+
+
+def _same_lines(where: str, shown: list[str], printed: list[str], figures: bool) -> None:
+    """The lines a page shows are the lines printed (stdout and stderr, in any order: one
+    terminal shows both), run times aside; with ``figures`` a ``name  number`` line agrees to
+    the digits shown (`_agrees`), any other line is printed as shown."""
+    def split(lines):
+        numbers, rest = {}, []
+        for line in (RUN_TIME.sub("# s)", line) for line in lines if line.strip()):
+            figure = FIGURE.match(line) if figures else None
+            if figure:
+                numbers[figure.group(1).strip()] = figure.group(2)
+            else:
+                rest.append(line)
+        return numbers, sorted(rest)
+
+    (quoted, page_lines), (fresh, lines) = split(shown), split(printed)
+    assert page_lines == lines, "\n".join(
+        [f"{where}: the page shows lines the command does not print, or misses some:"]
+        + [f"  page only:    {line}" for line in page_lines if line not in lines]
+        + [f"  printed only: {line}" for line in lines if line not in page_lines])
+    assert list(quoted) == list(fresh), f"{where}: the page shows figures {list(quoted)}, it prints {list(fresh)}"
+    for label, number in quoted.items():
+        assert _agrees(number, float(fresh[label])), f"{where}: the page says {label} {number}, it prints {fresh[label]}"
+
+
+@pytest.mark.parametrize("page, command, shown", _typed_commands())
+def test_a_command_typed_in_a_console_block_prints_what_the_page_shows(page, command, shown, tmp_path, capsys,
+                                                                         monkeypatch):
+    if "--fe" in command.split():
+        pytest.importorskip("skfem")
+    monkeypatch.setenv("COLUMNS", "80")  # argparse wraps --help to the terminal's width
+    _reader_folder(tmp_path, page, command)
+    code, out, err = _typed(command.split()[1:], tmp_path, capsys, monkeypatch)
+    lines = [line for line in shown.splitlines() if line.strip()]
+    refused = any(": error: " in line for line in lines)
+    where = f"{page.name}, '$ {command}'"
+    assert code == (2 if refused else 0), f"{where}: exit status {code}: {err}"
+    if lines[0].startswith("{"):
+        _same_json(where, lines, out)
+    else:
+        _same_lines(where, lines, (out + err).splitlines(), figures=command.split()[1] in ("demo", "simulate"))
+
+
+def test_the_typed_commands_are_found():
+    import test_docs_console
+
+    verbs = {p.values[1].split()[1] for p in _typed_commands()}
+    assert {"--help", "units", "compliance", "simulate", "fit", "diagnose", "sobol"} <= verbs, verbs
+    assert "hdsim simulate scenarios/reversal.toml" in {p.values[1] for p in _typed_commands()}
+    # a command left to another test is compared there
+    assert set(CHECKED_ELSEWHERE) <= {p.values[0] for p in test_docs_console._blocks()}
 
 
 def test_the_python_example_prints_what_its_comment_says():
