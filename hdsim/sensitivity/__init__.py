@@ -6,7 +6,8 @@ evaluation by row index), `hdsim.sensitivity.store` (resumable HDF5 studies),
 `hdsim.sensitivity.analysis` (indices, both interval kinds, convergence),
 `hdsim.sensitivity.checks` (consistency safeguards), `hdsim.sensitivity.functions`
 (closed forms with analytic indices), `hdsim.sensitivity.study` (the whole study),
-`hdsim.sensitivity.scenario_outputs` (a simulator metric as ``f(X)``) and
+`hdsim.sensitivity.scenario_outputs` (a simulator metric as ``f(X)``),
+`hdsim.sensitivity.metric_scenarios` (the built-in scenario of each metric) and
 `hdsim.sensitivity.api` (`sobol`: a study of any drive object).
 The figures are in `hdsim.plotting.sensitivity`; the method is described in
 docs/sensitivity.md.

@@ -13,6 +13,7 @@ import numpy as np
 
 from hdsim.errors import InputError
 from hdsim.sensitivity.functions import get_function
+from hdsim.sensitivity.metric_scenarios import FIRST_DEFAULTS, METRIC_SCENARIOS
 from hdsim.sensitivity.problem import CLI_WORDING, build_problem
 
 
@@ -43,7 +44,8 @@ def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, 
     tuple
         ``(func, problem, output, model, None)``; ``model`` is
         ``{"unit", "output", "scenario", "fingerprint", "evaluator"}``: the drive's name,
-        the scenario's name (None for the default one),
+        the scenario's name (None for the default one of the outputs that had one first,
+        `_recorded_scenario`),
         `hdsim.sensitivity.scenario_outputs.drive_fingerprint` of drive, scenario and
         evaluator, so resuming a study with another drive, scenario or evaluator is
         refused, and the evaluator that runs (``func.choice`` says why).
@@ -53,22 +55,23 @@ def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, 
     The simulator interface (`hdsim.sensitivity.scenario_outputs`) is imported here,
     not at the top: analytic-function studies do not need scipy's solvers or the catalog.
     """
+    wording = wording or CLI_WORDING
     if not output:
-        raise InputError("--unit studies need --output METRIC (e.g. lost_motion_arcmin)")
+        raise InputError(f"a study of a drive needs the metric it studies, e.g. "
+                         f"{wording.output_of.format(name='lost_motion_arcmin')}")
     batch = _batch()
     drive = batch.as_drive(unit)
     dotted = batch.resolve_names(drive, names)  # once, first: an unknown name is refused before anything else
     # nominal values only matter for --range
     nominal = {} if range_frac is None else batch.nominal_values(drive, list(names))
     bounds, dists = (_keyed_as_names(batch, drive, dict(zip(dotted, names)), given) for given in (bounds, dists))
-    problem = build_problem(names, nominal, range_frac, bounds, dists, wording or CLI_WORDING)
+    problem = build_problem(names, nominal, range_frac, bounds, dists, wording)
     _refuse_unbuildable_ends(drive, problem, dotted)
     # a built-in name travels as a name; anything else (a drive file too) as the model read
     # here, so the workers neither re-read a file nor depend on the working folder
     by_name = isinstance(unit, str) and "drive_file" not in drive.provenance
-    func = batch.model_function(unit if by_name else drive, list(names), output, scenario, evaluator)
-    model = {"unit": drive.name, "output": output,
-             "scenario": None if _is_default_scenario(batch, output, scenario, func.scenario) else func.scenario.name,
+    func = batch.model_function(unit if by_name else drive, list(names), output, scenario, evaluator, wording)
+    model = {"unit": drive.name, "output": output, "scenario": _recorded_scenario(output, scenario, func.scenario),
              "fingerprint": batch.drive_fingerprint(drive, func.scenario, func.evaluator),
              "evaluator": func.evaluator}
     return func, problem, output, model, None
@@ -89,14 +92,23 @@ def _keyed_as_names(batch, drive, as_given, options):
     return out
 
 
-def _is_default_scenario(batch, output: str, given, resolved) -> bool:
-    """Whether the study runs the built-in scenario of ``output``, named or not: a study
-    started without ``scenario`` and resumed with its default named was refused as another."""
+def _recorded_scenario(output: str, given, resolved) -> str | None:
+    """The scenario a study file records: its name, the same whether the default was named
+    or not (a study started without ``scenario`` and resumed with its default named was
+    refused as another). The outputs that had a default first record it as None, as their
+    files always have (`hdsim.sensitivity.metric_scenarios.FIRST_DEFAULTS`)."""
+    if output in FIRST_DEFAULTS and _is_default_scenario(output, given, resolved):
+        return None
+    return resolved.name
+
+
+def _is_default_scenario(output: str, given, resolved) -> bool:
+    """Whether the study runs the built-in scenario of ``output``, named or not."""
     if given is None:
         return True
     from hdsim.scenarios.scenario import load_scenario
 
-    default = batch.METRIC_SCENARIOS.get(output)
+    default = METRIC_SCENARIOS.get(output)
     return default is not None and load_scenario(default).data == resolved.data
 
 

@@ -53,6 +53,8 @@ class Wording:
     out: str = "--out"
     resume: str = "--resume"            # as it is switched on
     retry: str = "--resume --retry-failed"
+    output_of: str = "--output {name}"      # the output studied, ``{name}`` a metric
+    scenario_of: str = "--scenario {name}"  # a scenario named, ``{name}`` a built-in name or a file
 
     def given(self, option: str, value) -> str:
         """An option with the value it was given: ``--n 8`` or ``n=8``."""
@@ -63,7 +65,8 @@ CLI_WORDING = Wording("--bounds", "--dist", "--range P%", "--bounds {name}=LO:HI
 PYTHON_WORDING = Wording("bounds", "dists", "range=FRACTION", "bounds={{'{name}': (low, high)}}",
                          "dists={{'{name}': '{text}'}}", True, n="n", replicates="replicates",
                          workers="workers", executor="executor", target_width="target_width", out="out",
-                         resume="resume=True", retry="resume=True, retry_failed=True")
+                         resume="resume=True", retry="resume=True, retry_failed=True",
+                         output_of="output='{name}'", scenario_of="scenario='{name}'")
 
 
 @dataclass(frozen=True)

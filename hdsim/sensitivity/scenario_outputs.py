@@ -32,21 +32,10 @@ from hdsim.scenarios.evaluator import choose_evaluator
 from hdsim.scenarios.registry import get_setup
 from hdsim.scenarios.run import run_scenario
 from hdsim.scenarios.scenario import Scenario, load_scenario
+from hdsim.sensitivity.metric_scenarios import METRIC_SCENARIOS, default_scenario
+from hdsim.sensitivity.problem import PYTHON_WORDING, Wording
 from hdsim.simulation.solver import SolverOptions
 from hdsim.typing import ArrayLike
-
-#: which built-in scenario produces each metric
-METRIC_SCENARIOS = {
-    "lost_motion_arcmin": "lost_motion",
-    "torsion_at_rated_arcmin": "stiffness", "torsion_at_rated_tip_arcmin": "stiffness",
-    "hysteresis_loss_arcmin": "stiffness", "lost_motion_centre_line_arcmin": "stiffness",
-    "K1_Nm_per_rad": "stiffness", "K2_Nm_per_rad": "stiffness", "K3_Nm_per_rad": "stiffness",
-    "transmission_accuracy_arcsec": "kinematic_error", "lost_motion_on_reversal_arcsec": "kinematic_error",
-    # the input friction's (`input_friction.*`): a friction sweep, breakaway and efficiency
-    "running_torque_forward_Nm": "running_torque", "running_torque_reverse_Nm": "running_torque",
-    "starting_torque_mNm": "running_torque", "backdriving_torque_Nm": "running_torque",
-    "efficiency_percent": "running_torque",
-}
 
 #: metrics need only the turning points and branch samples, so a coarse output grid is
 #: enough; rtol 1e-4 moves lost motion by < 1e-4 relative against rtol 1e-6
@@ -417,7 +406,8 @@ def series_function(drive, names, signal: str, scenario) -> ScenarioSeries:
                           tuple(resolve_names(model, names)), signal, load_scenario(scenario))
 
 
-def model_function(drive, names, output: str, scenario=None, evaluator: str = "auto") -> ScenarioMetric:
+def model_function(drive, names, output: str, scenario=None, evaluator: str = "auto",
+                   wording: Wording = PYTHON_WORDING) -> ScenarioMetric:
     """The study callable for ``output`` of ``scenario`` on ``drive``.
 
     Parameters
@@ -430,9 +420,11 @@ def model_function(drive, names, output: str, scenario=None, evaluator: str = "a
         The metric, e.g. ``"lost_motion_arcmin"``.
     scenario : Scenario, str or os.PathLike, optional
         A scenario, a built-in scenario name or a scenario file; default the built-in
-        scenario producing ``output`` (`METRIC_SCENARIOS`).
+        scenario producing ``output`` (`hdsim.sensitivity.metric_scenarios.default_scenario`).
     evaluator : {"auto", "dynamic", "quasistatic"}
         `hdsim.scenarios.evaluator`; "auto" decides once, on the nominal drive.
+    wording : Wording
+        How a refusal names the options (``scenario=``, or the command line's ``--scenario``).
 
     Returns
     -------
@@ -443,13 +435,11 @@ def model_function(drive, names, output: str, scenario=None, evaluator: str = "a
     Raises
     ------
     InputError
-        On an unknown unit, parameter, output (without a scenario) or scenario, or an
-        unreadable scenario file.
+        On an unknown unit, parameter, output (without a scenario: one no built-in scenario
+        reports, or several do) or scenario, or an unreadable scenario file.
     """
     if scenario is None:
-        if output not in METRIC_SCENARIOS:
-            raise unknown_name("output metric", output, METRIC_SCENARIOS)
-        scenario = METRIC_SCENARIOS[output]
+        scenario = default_scenario(output, wording)
     resolved = load_scenario(scenario)  # fails early with a clear message
     model = _single(drive)
     choice = choose_evaluator(get_setup(resolved.setup), model, resolved, evaluator)
