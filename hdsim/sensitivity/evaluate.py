@@ -307,7 +307,7 @@ def evaluate(func, X, executor=None, *, workers=2, chunksize=None, rows=None,
         it had refused (``--resume --retry-failed``) does not stop the study.
     wording : Wording
         How a `ModelError` says to resume (``resume=True, retry_failed=True``; `CLI_WORDING`:
-        ``--resume --retry-failed``).
+        ``--resume --retry-failed``; empty: a study without a file, which cannot resume).
 
     Returns
     -------
@@ -417,23 +417,25 @@ def _collect(out, s, e, result, rows, on_chunk, bar):
 
 def _abort_if_broken(out, rows, labels, errors, succeeded_before: int = 0,
                      retry: str = PYTHON_WORDING.retry):
-    """ModelError for a model that is broken, not one whose physics refuses some rows: a
+    """ModelError for a model that is broken, not one whose physics refuses some rows (its
+    advice names ``retry``, how to resume, unless that is empty): a
     programming error on any row, or every row failing, judged over the whole study. A
     resumed study that re-runs only its failed rows (``--retry-failed``) sees nothing but
     rows the model had refused; judged on those alone, a drive refusing a corner of its box
     looked like a model failing everywhere. Called after each chunk (``labels``, ``errors``
     by position in it): only the new chunk's failures are read, each once."""
+    rerun = f"rerun with {retry}" if retry else "rerun"
     for i, message in errors.items():
         if message.split(":", 1)[0] in PROGRAMMING_ERRORS:
             raise ModelError(f"the model raised {message} (row {labels[i]}): a bug in the model, "
-                             f"not its physics; fix it, then rerun with {retry}")
+                             f"not its physics; fix it, then {rerun}")
     done = out.completed
     # Judge only once a few hundred rows are in; a whole failing region is possible.
     if not succeeded_before and done >= min(len(out.y), 256) and len(out.failures) >= done:
         first = min(out.failures)
         raise ModelError(f"the model failed on all {done} rows evaluated so far "
                          f"(first: row {rows[first]}: {out.failures[first]}); "
-                         f"fix the model, then rerun with {retry}")
+                         f"fix the model, then {rerun}")
 
 
 def _progress(total, enabled):

@@ -9,7 +9,7 @@ from __future__ import annotations
 import re
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -154,7 +154,8 @@ def run_study(func, problem, n, *, seed=0, second_order=False, replicates=4, exe
                 # the guard against a broken model judges the whole study, not the rows run now
                 ev = evaluate(func, store.reader(rows), executor, workers=workers,
                               chunksize=chunksize, rows=rows, on_chunk=store.write,
-                              progress=progress, succeeded_before=store.counts()["done"], wording=wording)
+                              progress=progress, succeeded_before=store.counts()["done"],
+                              wording=wording if out else replace(wording, retry=""))
                 evaluated_now += ev.evaluations
             res, width = _analyse_store(store, n_stage, conf_level, num_resamples, seed)
             if target_width is not None:
