@@ -51,16 +51,17 @@ def register(subparsers) -> None:
                         "test, kinematic-error runs at constant speed) through the quasi-static evaluator, "
                         "anything else through solve_ivp; 'dynamic' forces solve_ivp")
     p.add_argument("--n", default="1024", help="base points N, a power of 2 (default 1024)")
-    p.add_argument("--second-order", action="store_true", help="also estimate S2")
+    p.add_argument("--second-order", action="store_true", help="also estimate S2 (two parameters or more)")
     p.add_argument("--seed", default="0", help="scramble seed (default 0)")
     p.add_argument("--replicates", default="4",
                    help="independent scrambles of N/R base points each (default 4)")
     p.add_argument("--executor", default="local", help="local (default) or dask://HOST:PORT")
     p.add_argument("--workers", default="2", help="local processes (1 = in-process)")
     p.add_argument("--chunksize", default=None, help="rows per task (default: automatic)")
-    p.add_argument("--out", type=path_argument, help="HDF5 study file; every finished sample is flushed to it")
+    p.add_argument("--out", type=path_argument,
+                   help="HDF5 study file (its folder is created if missing); every finished sample is flushed to it")
     p.add_argument("--resume", action="store_true", help="continue (or extend N of) --out")
-    p.add_argument("--retry-failed", action="store_true", help="with --resume: rerun failed rows")
+    p.add_argument("--retry-failed", action="store_true", help="with --resume (refused without): rerun failed rows")
     p.add_argument("--target-width", default=None,
                    help="double N up to --n until every 95 %% interval is narrower")
     p.add_argument("--report", type=path_argument, metavar="DIR", help="write figures and the summary here")
@@ -72,7 +73,7 @@ def run(args) -> int:
     from hdsim.sensitivity import models
     from hdsim.sensitivity.evaluate import open_executor
     from hdsim.sensitivity.problem import CLI_WORDING
-    from hdsim.sensitivity.study import run_study
+    from hdsim.sensitivity.study import check_options, run_study
 
     t0 = time.perf_counter()
     n, seed = _int(args.n, "--n"), _int(args.seed, "--seed", minimum=0)
@@ -91,6 +92,7 @@ def run(args) -> int:
     # a broken model is ModelError (bad input, exit 2); anything else that fails here, a
     # broken process pool included, is the program's failure and reaches main (exit 1)
     func, problem, output, model, analytic = _resolve(args, models)
+    check_options(problem.names, args.second_order, chunksize, args.resume, args.retry_failed, CLI_WORDING)
     try:
         with open_executor(args.executor, workers, CLI_WORDING) as executor:
             result = run_study(func, problem, n, seed=seed, second_order=args.second_order,

@@ -19,7 +19,7 @@ from hdsim.errors import InputError
 from hdsim.sensitivity.evaluate import open_executor
 from hdsim.sensitivity.models import from_unit
 from hdsim.sensitivity.problem import PYTHON_WORDING, bounds_pair, parse_range
-from hdsim.sensitivity.study import StudyResult, run_study
+from hdsim.sensitivity.study import StudyResult, check_options, run_study
 from hdsim.typing import PathLike
 
 #: explicit bounds of a study: parameter name -> (low, high) [SI unit of the parameter]
@@ -66,7 +66,7 @@ def sobol(drive, params: str | Iterable[str] | TypedBounds, output: str, *, scen
     dists : mapping, optional
         ``{name: "unif" | "logunif" | "norm" | "norm:MEAN:SD"}``; default uniform.
     second_order : bool
-        Also estimate the second-order indices S2.
+        Also estimate the second-order indices S2 (two parameters or more).
     replicates : int
         Independently scrambled replicates R of N/R base points (power of 2, ≥ 2).
     seed : int
@@ -77,13 +77,13 @@ def sobol(drive, params: str | Iterable[str] | TypedBounds, output: str, *, scen
     workers : int
         Processes of the local pool; 1 evaluates in this process.
     chunksize : int, optional
-        Rows per task (default: the simulator's batch size).
+        Rows per task, at least 1 (default: the simulator's batch size).
     out : str or os.PathLike, optional
         HDF5 study file; every finished chunk is flushed to it.
     resume : bool
         Continue ``out``; refused if it holds another drive, scenario or design.
     retry_failed : bool
-        With ``resume``: evaluate the rows that failed before once more.
+        With ``resume`` (refused without): evaluate the rows that failed before once more.
     target_width : float, optional
         Double N (up to ``n``) until every replicate interval of S1 and ST is
         narrower than this [-].
@@ -111,8 +111,10 @@ def sobol(drive, params: str | Iterable[str] | TypedBounds, output: str, *, scen
     InputError
         On an unknown parameter (``unknown parameter 'x'``, naming the drive's close
         matches), output, unit or scenario; bounds that are not ``(low, high)`` with
-        low < high or name a parameter not studied; a bad file, range, N or R, or an
-        existing ``out`` without ``resume``.
+        low < high or name a parameter not studied; a bad file, range, N, R or chunk size,
+        ``second_order`` with one parameter, ``retry_failed`` without ``resume``, an existing
+        ``out`` without ``resume``, or ``evaluator="quasistatic"`` on a scenario that
+        evaluator cannot run (`hdsim.scenarios.run.run_scenario`'s reason).
     hdsim.sensitivity.evaluate.ModelError
         When the simulation fails on every row tried.
 
@@ -125,6 +127,8 @@ def sobol(drive, params: str | Iterable[str] | TypedBounds, output: str, *, scen
     >>> hdsim.sobol(drive, {"h_c": (0.55e-3, 0.7e-3)}, "lost_motion_arcmin", n=256)  # doctest: +SKIP
     """
     names, given = study_bounds(params, bounds)
+    # before the drive is built and run: these need no simulation to be refused
+    check_options(names, second_order, chunksize, resume, retry_failed)
     frac = _fraction(range)
     func, problem, output, model, _ = from_unit(drive, names, output, scenario, frac, given,
                                                 dict(dists or {}), wording=PYTHON_WORDING, evaluator=evaluator)

@@ -53,6 +53,9 @@ class Wording:
     out: str = "--out"
     resume: str = "--resume"            # as it is switched on
     retry: str = "--resume --retry-failed"
+    retry_failed: str = "--retry-failed"
+    second_order: str = "--second-order"
+    chunksize: str = "--chunksize"
     output_of: str = "--output {name}"      # the output studied, ``{name}`` a metric
     scenario_of: str = "--scenario {name}"  # a scenario named, ``{name}`` a built-in name or a file
 
@@ -66,6 +69,7 @@ PYTHON_WORDING = Wording("bounds", "dists", "range=FRACTION", "bounds={{'{name}'
                          "dists={{'{name}': '{text}'}}", True, n="n", replicates="replicates",
                          workers="workers", executor="executor", target_width="target_width", out="out",
                          resume="resume=True", retry="resume=True, retry_failed=True",
+                         retry_failed="retry_failed=True", second_order="second_order=True", chunksize="chunksize",
                          output_of="output='{name}'", scenario_of="scenario='{name}'")
 
 

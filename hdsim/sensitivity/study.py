@@ -127,7 +127,8 @@ def run_study(func, problem, n, *, seed=0, second_order=False, replicates=4, exe
     Raises
     ------
     InputError
-        On a bad N, R, seed or target width, an existing ``out`` without ``resume``, a study
+        On a bad N, R, seed, chunk size or target width, second order with one parameter,
+        ``retry_failed`` without ``resume``, an existing ``out`` without ``resume``, a study
         file of another definition, or too few successful blocks.
     hdsim.sensitivity.evaluate.ModelError
         When the model fails on every row of the first few hundred and on every row of the
@@ -137,6 +138,7 @@ def run_study(func, problem, n, *, seed=0, second_order=False, replicates=4, exe
     check_sizes(n, replicates, wording)
     if executor is None:
         check_workers(workers, wording)
+    check_options(problem.names, second_order, chunksize, resume, retry_failed, wording)
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InputError(f"seed must be a whole number, 0 or more, got {seed!r}")
     if target_width is not None and not target_width > 0:
@@ -197,6 +199,23 @@ def run_study(func, problem, n, *, seed=0, second_order=False, replicates=4, exe
     return StudyResult(problem, n_stage, bool(second_order), int(replicates), res, checks,
                        conv, failures, counts["done"] + counts["failed"], evaluated_now,
                        time.perf_counter() - t0, str(out) if out else None, extra)
+
+
+def check_options(names, second_order, chunksize, resume, retry_failed, wording: Wording = PYTHON_WORDING) -> None:
+    """InputError for options of a study of the parameters ``names`` that cannot mean what
+    they say (`run_study`'s keywords, named as ``wording`` does): second order with one parameter
+    (S2 is an index of a pair; it had run 2D + 2 rows a point for nothing), a chunk of no rows
+    (0 had been taken as the default), and failed rows retried in a study that is not resumed
+    (a new study has none: the option had been dropped without a word)."""
+    if second_order and len(names) < 2:
+        raise InputError(f"{wording.second_order} needs two parameters or more (S2 is an index of a pair); "
+                         f"the study varies only {', '.join(names)}")
+    if chunksize is not None and (isinstance(chunksize, bool) or not isinstance(chunksize, (int, np.integer))
+                                  or chunksize < 1):
+        raise InputError(f"{wording.chunksize} must be a whole number, at least 1, got {chunksize!r}")
+    if retry_failed and not resume:
+        raise InputError(f"{wording.retry_failed} reruns the failed rows of a study file continued with "
+                         f"{wording.resume}; a new study has none: add {wording.resume}, or leave it out")
 
 
 def _stages(n, replicates, target_width):
