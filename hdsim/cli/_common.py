@@ -30,13 +30,17 @@ def add_set_argument(parser, help: str | None = None) -> None:
 
 
 def parse_sets(items) -> dict[str, str]:
-    """``["NAME=VALUE", ...]`` as ``{NAME: VALUE}`` (strings); InputError on a malformed item."""
+    """``["NAME=VALUE", ...]`` as ``{NAME: VALUE}`` (strings); InputError on a malformed item
+    or a name given twice (the last value had won without a word)."""
     out = {}
     for item in items:
         name, sep, value = item.partition("=")
         if not sep or not name.strip() or not value.strip():
             raise InputError(f"--set expects NAME=VALUE, got '{item}'")
-        out[name.strip()] = value.strip()
+        name = name.strip()
+        if name in out:
+            raise InputError(f"--set {name} is given twice ({out[name]} and {value.strip()}); give it once")
+        out[name] = value.strip()
     return out
 
 
@@ -69,7 +73,6 @@ def apply_sets(model: HarmonicDrive, scenario: Scenario | None, sets: dict[str, 
         (model, scenario).
     """
     scenario_updates, effect_switches, params = {}, {}, {}
-    known = model.params()
     for name, text in sets.items():
         if name.startswith("scenario."):
             if scenario is None:
@@ -80,13 +83,22 @@ def apply_sets(model: HarmonicDrive, scenario: Scenario | None, sets: dict[str, 
                 raise InputError(f"--set {name}={text}: only 'none' can be set on a family from the "
                                  f"command line (switches the {name} effect off)")
             effect_switches[name] = NO_EFFECT[name]
-        elif name in known:
-            params[name] = _number(name, text)
-        else:
+    # the switches first, so that a parameter is set on the effect that runs: one of an effect
+    # switched off had been set on the old effect, then dropped with it without a word
+    model = model.with_effects(**effect_switches) if effect_switches else model
+    known = model.params()
+    for name, text in sets.items():
+        if name.startswith("scenario.") or name in FAMILIES:
+            continue
+        family, _, rest = name.partition(".")
+        if name not in known and family in effect_switches:
+            raise InputError(f"--set {name}: the same command switches {family} to none, which has no "
+                             f"parameter {rest}")
+        if name not in known:
             raise unknown_name("parameter", name, list(known) + list(FAMILIES))
+        params[name] = _number(name, text)
     scenario = scenario.with_updates(scenario_updates) if scenario_updates else scenario
     model = model.with_updates(params).require_consistent() if params else model
-    model = model.with_effects(**effect_switches) if effect_switches else model
     return model, scenario
 
 

@@ -64,7 +64,8 @@ def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, 
     dotted = batch.resolve_names(drive, names)  # once, first: an unknown name is refused before anything else
     # nominal values only matter for --range
     nominal = {} if range_frac is None else batch.nominal_values(drive, list(names))
-    bounds, dists = (_keyed_as_names(batch, drive, dict(zip(dotted, names)), given) for given in (bounds, dists))
+    bounds, dists = (_keyed_as_names(batch, drive, dict(zip(dotted, names)), given, option)
+                     for given, option in ((bounds, wording.bounds), (dists, wording.dists)))
     problem = build_problem(names, nominal, range_frac, bounds, dists, wording)
     _refuse_unbuildable_ends(drive, problem, dotted)
     # a built-in name travels as a name; anything else (a drive file too) as the model read
@@ -77,18 +78,22 @@ def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, 
     return func, problem, output, model, None
 
 
-def _keyed_as_names(batch, drive, as_given, options):
-    """``options`` (bounds or distributions by parameter) keyed as the study's names are
-    (``as_given``: each by its dotted name): ``h_c`` and ``flexspline.h_c`` are one
-    parameter, so either may name it in either place. A key that is no parameter of the
-    drive stays as written, for `build_problem` to name."""
-    out = {}
+def _keyed_as_names(batch, drive, as_given, options, option: str):
+    """``options`` (bounds or distributions by parameter, given as ``option``) keyed as the
+    study's names are (``as_given``: each by its dotted name): ``h_c`` and ``flexspline.h_c``
+    are one parameter, so either may name it in either place, but not both (the last had
+    won without a word). A key that is no parameter of the drive stays as written, for
+    `build_problem` to name."""
+    out, written = {}, {}
     for key, value in (options or {}).items():
+        given = key
         try:
             key = as_given.get(batch.resolve_names(drive, [key])[0], key)
         except InputError:
             pass
-        out[key] = value
+        if key in out:
+            raise InputError(f"{option} names {key} twice (as {written[key]} and {given}); give it once")
+        out[key], written[key] = value, given
     return out
 
 

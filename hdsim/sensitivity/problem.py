@@ -196,13 +196,17 @@ def parse_range(text: str) -> float:
 
 
 def parse_assignments(items, option: str) -> dict[str, str]:
-    """``['a=1:2', 'b=3:4']`` -> ``{'a': '1:2', 'b': '3:4'}`` (one line error otherwise)."""
+    """``['a=1:2', 'b=3:4']`` -> ``{'a': '1:2', 'b': '3:4'}`` (one line error otherwise: a
+    malformed item, or a name given twice, whose last value had won without a word)."""
     out = {}
     for item in items or ():
         name, sep, value = item.partition("=")
         if not sep or not name.strip() or not value.strip():
             raise InputError(f"{option} expects NAME=VALUE, got '{item}'")
-        out[name.strip()] = value.strip()
+        name = name.strip()
+        if name in out:
+            raise InputError(f"{option} {name} is given twice ({out[name]} and {value.strip()}); give it once")
+        out[name] = value.strip()
     return out
 
 
