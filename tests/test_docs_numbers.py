@@ -150,12 +150,14 @@ def _same_json(where: str, shown: list[str], out: str) -> None:
     assert len(shown) == 1, f"{where}: a JSON example is one line"
     page = json.loads(shown[0].replace(", ...}", "}"), parse_float=str)
     printed = json.loads(out)
-    assert list(page) == list(printed)[:len(page)], f"{where}: the page shows keys {list(page)}, it prints {list(printed)}"
+    assert list(page) == list(printed)[:len(page)], \
+        f"{where}: the page shows keys {list(page)}, it prints {list(printed)}"
     for key, value in page.items():
         if key != "metrics":
             assert value == printed[key], f"{where}: the page says {key} {value!r}, it prints {printed[key]!r}"
             continue
-        assert list(value) == list(printed[key]), f"{where}: the page shows metrics {list(value)}, it prints {list(printed[key])}"
+        assert list(value) == list(printed[key]), \
+            f"{where}: the page shows metrics {list(value)}, it prints {list(printed[key])}"
         for name, number in value.items():
             assert _agrees(number, printed[key][name]), \
                 f"{where}: the page says {name} {number}, it prints {printed[key][name]:.6g}"
@@ -182,7 +184,8 @@ def _same_lines(where: str, shown: list[str], printed: list[str], figures: bool)
         + [f"  printed only: {line}" for line in lines if line not in page_lines])
     assert list(quoted) == list(fresh), f"{where}: the page shows figures {list(quoted)}, it prints {list(fresh)}"
     for label, number in quoted.items():
-        assert _agrees(number, float(fresh[label])), f"{where}: the page says {label} {number}, it prints {fresh[label]}"
+        assert _agrees(number, float(fresh[label])), \
+            f"{where}: the page says {label} {number}, it prints {fresh[label]}"
 
 
 @pytest.mark.parametrize("page, command, shown", _typed_commands())

@@ -446,7 +446,8 @@ def model_function(drive, names, output: str, scenario=None, evaluator: str = "a
     # a scenario named may not report the output, and a forced quasi-static evaluator may not
     # run the scenario (a motor loop, metric groups it has no signals for): either is refused
     # here, with run_scenario's reason, not after every row of the study has failed on it
-    if choice.requested == "quasistatic" or not (isinstance(scenario, str) and METRIC_SCENARIOS.get(output) == scenario):
+    default = isinstance(scenario, str) and METRIC_SCENARIOS.get(output) == scenario
+    if not default or choice.requested == "quasistatic":
         _check_output(model, resolved, output, choice.chosen)
     # a unit given by name travels by name: workers load it from their own cache
     return ScenarioMetric(drive if isinstance(drive, str) else model,
