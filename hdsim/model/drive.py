@@ -17,7 +17,7 @@ from typing import ClassVar
 import numpy as np
 
 from hdsim.model import effects as fx
-from hdsim.model.parameters import Parameters, _as_float_array, numeric_fields, param
+from hdsim.model.parameters import Parameters, as_numbers, numeric_fields, param
 from hdsim.errors import InputError, unknown_name
 from hdsim.model.geometry import FlexsplineGeometry
 from hdsim.model.input_friction import InputFriction, catalog_friction
@@ -266,15 +266,28 @@ class HarmonicDrive:
         raise unknown_name("parameter", name, self.params())
 
     def with_updates(self, updates: dict) -> "HarmonicDrive":
-        """A new model with ``{dotted name: value}`` changed; values may be arrays (a batch)."""
+        """A new model with ``{dotted name: value}`` changed.
+
+        Each value is a number or a 1-D array of numbers (a batch of models, one per
+        element); a string, even one that reads as a number, is refused: the CLI parses
+        ``--set`` text itself.
+
+        Raises
+        ------
+        InputError
+            On an unknown name, a value that is not a number or 1-D array of numbers
+            (naming the parameter and the value's type), a value outside its bounds, or
+            batch arrays of different lengths.
+        """
         known = _dotted_names(tuple((prefix, type(part)) for prefix, part in self._parts().items()))
         grouped: dict[str, dict] = {}
         for name, value in updates.items():
             if name not in known:
                 raise unknown_name("parameter", name, self.params())
             prefix, _, attr = name.partition(".")
+            numbers = as_numbers(name, value)  # a string or a bool is refused here, by its name and type
             if isinstance(value, (list, tuple, np.ndarray)):  # a batch: the parameter holders compute on arrays
-                value = _as_float_array(prefix, attr, value)
+                value = numbers
                 if value.size == 0:
                     raise InputError(f"{name} is an empty array; expected a number or a 1-D array of values")
             grouped.setdefault(prefix, {})[attr] = value

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field, fields, replace
 import numpy as np
 
 from hdsim.errors import InputError
-from hdsim.model.parameters import not_whole, whole_count_message
+from hdsim.model.parameters import as_numbers, not_whole, whole_count_message
 
 #: dedendum of the flexspline teeth in modules: the usual full-depth proportion
 #: (addendum 1 m, dedendum 1.25 m), which leaves a root clearance of 0.25 m
@@ -173,13 +173,7 @@ def validate_geometry(g: FlexsplineGeometry) -> None:
     """
     values = {}
     for f in fields(g):
-        try:
-            values[f.name] = np.asarray(getattr(g, f.name), dtype=float)
-        except (TypeError, ValueError):
-            raise InputError(f"flexspline.{f.name} must be a number, got {getattr(g, f.name)!r}") from None
-        if values[f.name].ndim > 1:
-            raise InputError(f"flexspline.{f.name} must be a number or a 1-D array, "
-                             f"got shape {values[f.name].shape}")
+        values[f.name] = as_numbers(f"flexspline.{f.name}", getattr(g, f.name))
     sizes = {v.size for v in values.values() if v.ndim == 1} - {1}
     if len(sizes) > 1:
         raise InputError(f"flexspline batch parameters have different lengths {sorted(sizes)}")

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import functools
 import math
+import reprlib
 from dataclasses import MISSING, field, fields
 from typing import ClassVar
 
@@ -66,14 +67,43 @@ def count_fields(cls) -> tuple[tuple[str, str], ...]:
     return tuple((f.name, f.metadata["count"]) for f in fields(cls) if f.metadata.get("count"))
 
 
-def _as_float_array(owner: str, name: str, value) -> np.ndarray:
+def _is_number(value) -> bool:
+    """Whether ``value`` is one real number (Python's or numpy's); a bool is not one."""
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
+
+
+def _described(value) -> str:
+    """What was given instead of numbers, for a refusal: the type and value, of a sequence
+    the first element that is no number."""
+    if isinstance(value, (list, tuple, np.ndarray)):
+        for element in (value.ravel() if isinstance(value, np.ndarray) else value):
+            if not _is_number(element):
+                element = element.item() if isinstance(element, np.generic) else element
+                return f"{type(value).__name__} holding {type(element).__name__} {reprlib.repr(element)}"
+    return f"{type(value).__name__} {reprlib.repr(value)}"
+
+
+def as_numbers(name: str, value) -> np.ndarray:
+    """``value`` as a float array of at most one dimension (a batch), or an `InputError`
+    naming the parameter ``name`` and the type of what was given.
+
+    Numbers only: numpy would read the string ``"0.6e-3"`` as 0.0006 in a list and fail
+    on it alone, and take ``True`` as 1. A Python caller who passes either has mixed
+    something up; the CLI parses its own text before it gets here.
+    """
     try:
-        array = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{owner}.{name} must be a number, got {value!r}") from None
+        array = np.asarray(value)
+    except ValueError:  # ragged nesting, refused below with what it holds
+        array = np.asarray(None)
+    if array.dtype.kind not in "iuf":
+        raise InputError(f"{name} must be a number or a 1-D array of numbers, got {_described(value)}")
     if array.ndim > 1:
-        raise InputError(f"{owner}.{name} must be a number or a 1-D array, got shape {array.shape}")
-    return array
+        raise InputError(f"{name} must be a number or a 1-D array of numbers, got shape {array.shape}")
+    return array.astype(float, copy=False)
+
+
+def _as_float_array(owner: str, name: str, value) -> np.ndarray:
+    return as_numbers(f"{owner}.{name}", value)
 
 
 def float_if_scalar(value):
