@@ -1,5 +1,6 @@
 """What a Python caller gives is checked as the CLI checks it, with one InputError line.
 
+`run_scenario` takes a unit name or a drive file's path as `hdsim.sobol` does, and
 `HarmonicDrive.with_updates` refuses what is not a number by the parameter's name and the
 value's type.
 """
@@ -9,8 +10,34 @@ import pytest
 
 from hdsim.errors import InputError
 from hdsim.model.catalog import load_unit
+from hdsim.scenarios.run import run_scenario
 
 UNIT = load_unit("CSG-25-100")
+
+
+@pytest.mark.parametrize("evaluator", ["quasistatic", "auto"])
+def test_a_unit_name_runs_as_its_drive(evaluator):
+    """It stopped in an AttributeError ('str' object has no attribute 'batch_size' / 'drive')."""
+    by_name = run_scenario("CSG-25-100", "lost_motion", evaluator=evaluator)
+    assert by_name.model is UNIT  # load_unit's cached unit
+    assert by_name.metric("lost_motion_arcmin") == run_scenario(UNIT, "lost_motion", evaluator=evaluator).metric(
+        "lost_motion_arcmin")
+
+
+def test_a_drive_file_path_runs_as_its_drive(tmp_path):
+    path = tmp_path / "zxf.toml"
+    path.write_text('name = "ZXF17-50"\nratio = 50\nrated_torque_Nm = 16.0\n')
+    assert run_scenario(path, "lost_motion", evaluator="quasistatic").model.name == "ZXF17-50"
+
+
+@pytest.mark.parametrize("drive, match", [
+    ("CSG-99-100", "unknown unit 'CSG-99-100'"),
+    (3.0, "a drive is a HarmonicDrive, a built-in unit name or a drive file's path, got float"),
+])
+def test_what_is_no_drive_is_one_input_error(drive, match):
+    with pytest.raises(InputError, match=match) as err:
+        run_scenario(drive, "lost_motion", evaluator="quasistatic")
+    assert "\n" not in str(err.value)
 
 
 @pytest.mark.parametrize("name, value, told", [

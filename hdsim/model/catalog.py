@@ -17,7 +17,7 @@ from hdsim.model.datasheet import _data, assemble_unit, catalog_entry, default_u
 from hdsim.model.drive import HarmonicDrive
 from hdsim.model.drive_file import load_drive_file
 
-__all__ = ["load_unit", "is_drive_file"]
+__all__ = ["load_unit", "is_drive_file", "as_drive"]
 
 
 @functools.cache
@@ -92,3 +92,30 @@ def load_unit(name_or_path: str | os.PathLike | None = None) -> HarmonicDrive:
 def _cached_drive_file(path: str, real_path: str, mtime_ns: int, size: int) -> HarmonicDrive:
     """`load_drive_file`, once per file version (the key holds its real path, time and size)."""
     return load_drive_file(path)
+
+
+def as_drive(drive) -> HarmonicDrive:
+    """The drive a caller means: a `HarmonicDrive` as it is, a built-in unit name or a drive
+    file's path through `load_unit`.
+
+    Parameters
+    ----------
+    drive : HarmonicDrive, str or os.PathLike
+        A model object (built-in, changed with ``with_updates``, fitted), the name of a
+        built-in unit or the path of a drive file.
+
+    Returns
+    -------
+    HarmonicDrive
+
+    Raises
+    ------
+    InputError
+        On an unknown unit name, a refused drive file, or an object that is none of these.
+    """
+    if isinstance(drive, HarmonicDrive):
+        return drive
+    if isinstance(drive, (str, os.PathLike)):
+        return load_unit(drive)
+    raise InputError(f"a drive is a HarmonicDrive, a built-in unit name or a drive file's path, "
+                     f"got {type(drive).__name__}")

@@ -7,6 +7,7 @@ write and read the run file (`hdsim.scenarios.results`).
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -14,6 +15,7 @@ import numpy as np
 
 from hdsim._version import __version__
 from hdsim.errors import unknown_name
+from hdsim.model.catalog import as_drive
 from hdsim.model.drive import HarmonicDrive
 from hdsim.scenarios.evaluator import choose_evaluator
 from hdsim.scenarios.registry import get_setup
@@ -101,14 +103,15 @@ def solver_options(scenario: Scenario, base: SolverOptions | None = None) -> Sol
     return options.replace(**solver) if solver else options
 
 
-def run_scenario(model: HarmonicDrive, scenario, *, samples_per_segment: int | None = None,
+def run_scenario(model: HarmonicDrive | str | os.PathLike, scenario, *, samples_per_segment: int | None = None,
                  options: SolverOptions | None = None, evaluator: str = "dynamic") -> Run:
     """Simulate a scenario on a model (single or batch) and compute its metrics.
 
     Parameters
     ----------
-    model : HarmonicDrive
-        A single model or a batch of M.
+    model : HarmonicDrive, str or os.PathLike
+        A single model or a batch of M, or a built-in unit's name or a drive file's path
+        (`hdsim.model.catalog.load_unit`), as `hdsim.sobol` takes.
     scenario : Scenario, str or os.PathLike
         A scenario, a scenario file or the name of a built-in scenario (`load_scenario`).
     samples_per_segment : int, optional
@@ -130,9 +133,10 @@ def run_scenario(model: HarmonicDrive, scenario, *, samples_per_segment: int | N
     Raises
     ------
     InputError
-        On a bad scenario, a metric group its bench does not report, or an evaluator
-        the bench does not have.
+        On an unknown unit or drive file, a bad scenario, a metric group its bench does
+        not report, or an evaluator the bench does not have.
     """
+    model = as_drive(model)
     scenario = load_scenario(scenario)
     setup = get_setup(scenario.setup)
     for name in scenario.metrics:
