@@ -1,6 +1,7 @@
 """What a Python caller gives is checked as the CLI checks it, with one InputError line.
 
-`run_scenario` takes a unit name or a drive file's path as `hdsim.sobol` does, and
+`run_scenario` takes a unit name or a drive file's path as `hdsim.sobol` does, refuses
+values that contradict each other by the model's own check (the one ``--set`` makes), and
 `HarmonicDrive.with_updates` refuses what is not a number by the parameter's name and the
 value's type.
 """
@@ -38,6 +39,21 @@ def test_what_is_no_drive_is_one_input_error(drive, match):
     with pytest.raises(InputError, match=match) as err:
         run_scenario(drive, "lost_motion", evaluator="quasistatic")
     assert "\n" not in str(err.value)
+
+
+def test_a_first_breakpoint_above_the_second_is_refused_as_the_cli_refuses_it():
+    """with_updates builds it (a fit's trial models pass through such values); the run had
+    given K1…K3 of a law whose knees are swapped."""
+    drive = UNIT.with_updates({"hardening.T1": 60.0})
+    with pytest.raises(InputError, match=r"^hardening\.T1 = 60 must be below hardening\.T2 = 48 N·m \(more"):
+        run_scenario(drive, "stiffness", evaluator="quasistatic")
+
+
+def test_a_batch_is_checked_sample_by_sample():
+    """T1 varied against one T2: the check had indexed T2 as if it were an array (IndexError)."""
+    drive = UNIT.with_updates({"hardening.T1": np.array([10.0, 60.0])})
+    with pytest.raises(InputError, match=r"hardening\.T1 = 60 must be below hardening\.T2 = 48 N·m in sample 1 "):
+        run_scenario(drive, "stiffness", evaluator="quasistatic")
 
 
 @pytest.mark.parametrize("name, value, told", [

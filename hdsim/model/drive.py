@@ -216,7 +216,9 @@ class HarmonicDrive:
 
     def require_consistent(self) -> "HarmonicDrive":
         """This drive, or InputError naming the first effect whose values contradict each other
-        (`Effect.inconsistency`): for the values a user gives (``--set``, a study's ranges)."""
+        (`Effect.inconsistency`, element by element in a batch): the one check of the values a
+        user gives, made where they reach a run (``--set``, a study's rows, `run_scenario`)
+        rather than in `with_updates`, through which a fit's trial models pass."""
         for effect in self.effects().values():
             reason = effect.inconsistency()
             if reason:
@@ -270,7 +272,9 @@ class HarmonicDrive:
 
         Each value is a number or a 1-D array of numbers (a batch of models, one per
         element); a string, even one that reads as a number, is refused: the CLI parses
-        ``--set`` text itself.
+        ``--set`` text itself. Values that contradict each other (a three-segment law's
+        T1 at or above T2) build, since a fit's trial models pass through them; running
+        the model refuses them (`require_consistent`).
 
         Raises
         ------

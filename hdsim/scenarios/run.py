@@ -133,10 +133,12 @@ def run_scenario(model: HarmonicDrive | str | os.PathLike, scenario, *, samples_
     Raises
     ------
     InputError
-        On an unknown unit or drive file, a bad scenario, a metric group its bench does
-        not report, or an evaluator the bench does not have.
+        On an unknown unit, a model whose values contradict each other (a three-segment
+        law's T1 at or above T2, in any sample of a batch: `HarmonicDrive.require_consistent`,
+        the check ``--set`` makes), a bad scenario, a metric group its bench does not
+        report, or an evaluator the bench does not have.
     """
-    model = as_drive(model)
+    model = as_drive(model).require_consistent()
     scenario = load_scenario(scenario)
     setup = get_setup(scenario.setup)
     for name in scenario.metrics:

@@ -102,8 +102,10 @@ class Effect(Parameters, FamilyKnowledge):
 
     def inconsistency(self) -> str:
         """Why the values given together do not make this effect ('' when they do): the bounds of
-        each value alone are checked on construction; this is what relates them (a fit's trial
-        models may pass through such values, so only what a user gives is refused by it)."""
+        each value alone are checked on construction; this is what relates them, element by
+        element in a batch, naming the first sample that fails (a fit's trial models may pass
+        through such values, so only what a user gives is refused by it:
+        `HarmonicDrive.require_consistent`)."""
         return ""
 
     # ------------------------------------------------------------------ fit protocol

@@ -117,13 +117,16 @@ class ThreeSegmentHardening(Hardening):
         return (kernels.smooth_three_segment_spring,), parameter_rows(size, *self._args(c_struct, c_mesh))
 
     def inconsistency(self) -> str:
-        T1, T2 = np.asarray(self.T1, dtype=float), np.asarray(self.T2, dtype=float)
-        bad = np.atleast_1d(T1 >= T2)
+        # element by element: a batch may vary T1 alone, against one T2
+        T1, T2 = np.broadcast_arrays(np.atleast_1d(np.asarray(self.T1, dtype=float)),
+                                     np.atleast_1d(np.asarray(self.T2, dtype=float)))
+        bad = T1 >= T2
         if not bad.any():
             return ""
         k = int(np.argmax(bad))
-        return (f"hardening.T1 = {np.atleast_1d(T1)[k]:g} must be below hardening.T2 = {np.atleast_1d(T2)[k]:g} "
-                "N·m (more teeth engage at the second breakpoint)")
+        where = f" in sample {k} of the batch" if bad.size > 1 else ""
+        return (f"hardening.T1 = {T1[k]:g} must be below hardening.T2 = {T2[k]:g} N·m{where} "
+                "(more teeth engage at the second breakpoint)")
 
     def free_parameters(self, context: FitContext):
         t = context.max_torque
