@@ -12,7 +12,9 @@ Conventions (see docs/physics.md, "Test definitions"):
 - **K1, K2, K3**: three-segment law (knots at the unit's T1, T2) fitted with a free
   offset to the loading branch from zero torque to −T_N after the reversal at +T_N,
   mirrored; samples below T1/2 are left out: the backlash step and the micro-slip
-  sit there, and they are what lost motion and hysteresis loss measure. **Torsion at rated** is the fitted law's twist at T_N.
+  sit there, and they are what lost motion and hysteresis loss measure. A segment the
+  cycle does not load into gives NaN for its K; a cycle that never reaches T1/2 is refused.
+  **Torsion at rated** is the fitted law's twist at T_N.
 
 Every function takes arrays with a leading batch axis ``(M, nt)`` and returns ``(M,)``.
 """
@@ -133,6 +135,17 @@ def lost_motion_centre_line(torque, twist, levels, n, level_torque):
     return 2.0 * (mid0 - mid_minus)
 
 
+def stiffness_fit_unreachable(amplitude, T1, T2, rated_torque) -> str:
+    """Why a cycle to ±``amplitude`` T_N gives the three-segment fit no sample ('' when it
+    gives some), with the amplitude that gives all three segments."""
+    peak = amplitude * rated_torque
+    if peak > 0.5 * T1:
+        return ""
+    return (f"the stiffness metrics fit the loading branch above T1/2 = {0.5 * T1:g} N·m, which a cycle to "
+            f"±{amplitude:g} T_N ({peak:.4g} N·m) never reaches; K1, K2 and K3 need load.amplitude above "
+            f"T2/T_N = {T2 / rated_torque:.3g} (T2 = {T2:g} N·m; the stiffness scenario loads to ±T_N)")
+
+
 def stiffness_fit(torque, twist, levels, n, T1, T2, rated_torque):
     """Three-segment stiffness fitted to the loading branch to −A.
 
@@ -152,7 +165,15 @@ def stiffness_fit(torque, twist, levels, n, T1, T2, rated_torque):
     Returns
     -------
     numpy.ndarray, shape (4, M)
-        K1, K2, K3 [N·m/rad] and the torsion at T_N [rad].
+        K1, K2, K3 [N·m/rad] and the torsion at T_N [rad]. A segment the branch does not
+        load into gives NaN for its K and for the torsion (a sample of a batch may stop
+        short of its own T2 while the others reach theirs).
+
+    Raises
+    ------
+    InputError
+        If the branch of a sample never reaches T1/2, where the fit starts: there is
+        nothing to fit (the ±4 % lost-motion cycle on any catalog unit).
     """
     (td, pd), _ = _branches(torque, twist, levels, n)
     M = torque.shape[0]
@@ -160,6 +181,9 @@ def stiffness_fit(torque, twist, levels, n, T1, T2, rated_torque):
     out = np.empty((4, M))
     for m in range(M):
         load, phi = -td[m], -pd[m]
+        reason = stiffness_fit_unreachable(float(np.max(levels)), T1[m], T2[m], TN[m])
+        if reason:
+            raise InputError(reason + (f" (sample {m} of the batch)" if M > 1 else ""))
         keep = load >= 0.5 * T1[m]
         K1, K2, K3, _ = fit_three_segment(load[keep], phi[keep], T1[m], T2[m])
         out[:, m] = K1, K2, K3, three_segment_twist(TN[m], T1[m], T2[m], K1, K2, K3)

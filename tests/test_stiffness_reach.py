@@ -1,0 +1,58 @@
+"""The stiffness metrics read only what the torque cycle loads the drive to.
+
+A cycle too small for the three-segment fit (the ±4 % lost-motion cycle, whose loading
+branch never reaches T1/2) is refused with one line saying which amplitude the metrics
+need (docs/physics.md, "Test definitions").
+"""
+
+import numpy as np
+import pytest
+
+from hdsim.errors import InputError
+from hdsim.model.catalog import load_unit
+from hdsim.scenarios import locked_metrics as lm
+from hdsim.scenarios.run import run_scenario
+from hdsim.scenarios.scenario import load_scenario
+from hdsim.simulation.profiles import cosine_ramps
+
+T_N, K, F, N = 87.0, 3.1e4, 2.0, 200
+
+
+def coulomb_loop(amplitude):
+    """(torque, twist, levels) of a linear spring K with a parallel Coulomb friction F cycled
+    0 → +A → −A → 0 (A = ``amplitude`` T_N), N samples per ramp: the virgin loading sticks
+    until T = F, the descent from +A until T = A − 2F."""
+    levels = np.array([0.0, amplitude, -amplitude, 0.0])
+    t = np.linspace(0.0, 3.0, 3 * N + 1)
+    T = T_N * cosine_ramps(np.arange(4.0), levels)(t)
+    A = amplitude * T_N
+    x = np.empty_like(T)
+    up0, down = slice(0, N + 1), slice(N, 2 * N + 1)
+    x[up0] = np.maximum(T[up0] - F, 0.0) / K
+    x[down] = np.minimum((A - F) / K, (T[down] + F) / K)
+    x[2 * N:] = np.maximum((-A + F) / K, (T[2 * N:] - F) / K)
+    return T[None, :], x[None, :], levels
+
+
+LOST_MOTION_STIFFNESS = load_scenario("lost_motion").with_updates({"metrics": ["stiffness"]})
+
+
+def test_the_lost_motion_cycle_cannot_give_the_stiffness_metrics_and_says_why():
+    """The ±4 % cycle never reaches T1/2, where the fit starts: it stopped in numpy (np.ptp of
+    an empty array); the refusal names the amplitude that gives K1…K3, T2/T_N = 48/87."""
+    with pytest.raises(InputError, match=r"T1/2 = 7 N·m.*±0\.04 T_N.*load\.amplitude above T2/T_N = 0\.552"):
+        run_scenario(load_unit("CSG-25-100"), LOST_MOTION_STIFFNESS, evaluator="quasistatic")
+
+
+def test_a_batch_sample_the_cycle_cannot_fit_is_named():
+    T, x, levels = coulomb_loop(0.2)  # to 17.4 N·m: above T1/2 = 7 N·m, below T1/2 = 18 N·m
+    with pytest.raises(InputError, match=r"T1/2 = 18 N·m.*\(sample 1 of the batch\)"):
+        lm.stiffness_fit(np.repeat(T, 2, 0), np.repeat(x, 2, 0), levels, N, np.array([14.0, 36.0]), 48.0, T_N)
+
+
+def test_the_cli_refuses_the_stiffness_metrics_of_the_lost_motion_cycle_in_one_line(cli, tmp_path):
+    code, out, err = cli("simulate", "lost_motion", "--set", 'scenario.metrics=["stiffness"]',
+                         "--evaluator", "quasistatic", "--no-figures", "--out", tmp_path / "o")
+    assert code == 2 and out == ""
+    assert len(err.strip().splitlines()) == 1 and "load.amplitude above T2/T_N" in err
+    assert not (tmp_path / "o" / "lost_motion.h5").exists()
