@@ -2,7 +2,8 @@
 
 A cycle too small for the three-segment fit (the ±4 % lost-motion cycle, whose loading
 branch never reaches T1/2) is refused with one line saying which amplitude the metrics
-need (docs/physics.md, "Test definitions").
+need; the torsion "at rated" read at the tips is read at ±T_N, not at the cycle's tips,
+and is NaN for a cycle that never reaches T_N (docs/physics.md, "Test definitions").
 """
 
 import numpy as np
@@ -32,6 +33,40 @@ def coulomb_loop(amplitude):
     x[down] = np.minimum((A - F) / K, (T[down] + F) / K)
     x[2 * N:] = np.maximum((-A + F) / K, (T[2 * N:] - F) / K)
     return T[None, :], x[None, :], levels
+
+
+def test_torsion_at_the_tips_is_read_at_rated_torque_on_a_cycle_beyond_it():
+    """At ±1.5 T_N the loading branches pass ±T_N at ±(T_N − F)/K; the tips' own twist is
+    (1.5 T_N − F)/K, which had been reported under the name."""
+    T, x, levels = coulomb_loop(1.5)
+    tips = lm.torsion_at_rated_tips(T, x, levels, N, T_N)
+    assert tips == pytest.approx([(T_N - F) / K], rel=1e-9)
+
+
+def test_torsion_at_the_tips_of_a_rated_cycle_is_the_tips_twist():
+    T, x, levels = coulomb_loop(1.0)
+    assert lm.torsion_at_rated_tips(T, x, levels, N, T_N) == pytest.approx([(T_N - F) / K], rel=1e-12)
+
+
+def test_torsion_at_rated_is_not_measured_by_a_cycle_short_of_rated():
+    T, x, levels = coulomb_loop(0.6)
+    assert np.isnan(lm.torsion_at_rated_tips(T, x, levels, N, T_N)).all()
+
+
+@pytest.mark.parametrize("amplitude, measured", [(0.6, False), (1.5, True)])
+def test_a_stiffness_run_reports_the_twist_at_rated_only_where_its_cycle_reaches_it(amplitude, measured):
+    """Against the ±T_N run of the same drive: at ±1.5 T_N the twist read at T_N on the way
+    out agrees with the ±T_N tips to 1e-3 (it read 9.35 arcmin for 6.71 before)."""
+    drive = load_unit("CSG-25-100")
+    stiffness = load_scenario("stiffness")
+    rated = run_scenario(drive, stiffness, evaluator="quasistatic").metric("torsion_at_rated_tip_arcmin")
+    run = run_scenario(drive, stiffness.with_updates({"load.amplitude": amplitude}), evaluator="quasistatic")
+    value = run.metric("torsion_at_rated_tip_arcmin")
+    if measured:
+        assert value == pytest.approx(rated, rel=1e-3)
+    else:
+        assert np.isnan(value)
+        assert np.isfinite(run.metric("K3_Nm_per_rad"))  # the cycle passes T2: K3 is measured
 
 
 LOST_MOTION_STIFFNESS = load_scenario("lost_motion").with_updates({"metrics": ["stiffness"]})
