@@ -154,3 +154,19 @@ def test_a_sweeps_predictions_carry_the_caveat_when_the_law_misses_an_effect(fam
     _predictions(page, RunningTorqueTest(), result, None)
     text = page.markdown()
     assert "running torque at 2000 rpm, forward" in text and (CAVEAT in text) is caveat
+
+
+def test_a_draw_whose_values_contradict_each_other_is_left_out_not_the_whole_band():
+    """run_scenario refuses a batch holding a hardening with T1 above T2 (as --set does); a
+    band's draws had then all been lost for one such draw ("no band")."""
+    from types import SimpleNamespace
+
+    from hdsim.identification.predictions import _metrics
+    from hdsim.model.catalog import load_unit
+    from hdsim.scenarios.scenario import builtin_scenario_path, load_scenario
+
+    coordinates = SimpleNamespace(updates=lambda rows: {"hardening.T1": rows[:, 0], "hardening.T2": rows[:, 1]})
+    rows = np.array([[14.0, 48.0], [50.0, 48.0], [20.0, 48.0]])
+    scenario = load_scenario(builtin_scenario_path("stiffness"))
+    (K1,) = _metrics(load_unit("CSG-25-100"), coordinates, rows, scenario, ["K1_Nm_per_rad"])
+    assert np.isnan(K1[1]) and np.all(np.isfinite(K1[[0, 2]]))

@@ -207,13 +207,34 @@ def _metrics(model, coordinates, rows, scenario, metrics):
     cannot run the scenario."""
     from hdsim.scenarios.run import run_scenario
 
+    size = 1 if rows is None else len(rows)
+    if rows is not None:
+        # a draw whose values contradict each other (a hardening's T1 drawn above its T2) is no
+        # drive: run_scenario refuses the whole batch for it, so it is left out (NaN) instead
+        kept = np.array([_consistent(model.with_updates(coordinates.updates(rows[i:i + 1]))) for i in range(size)])
+        if not kept.all():
+            values = _metrics(model, coordinates, rows[kept], scenario, metrics) if kept.any() else None
+            if values is None:
+                return None
+            out = [np.full(size, np.nan) for _ in metrics]
+            for full, part in zip(out, values):
+                full[kept] = part
+            return out
     batch = model if rows is None else model.with_updates(coordinates.updates(rows))
     try:
         run = run_scenario(batch, scenario, evaluator="quasistatic")
     except (InputError, SolverError):
         return None
-    size = 1 if rows is None else len(rows)
     return [np.broadcast_to(np.asarray(run.metrics[m], dtype=float).reshape(-1), (size,)) for m in metrics]
+
+
+def _consistent(drive) -> bool:
+    """Whether ``drive``'s values agree with each other (`HarmonicDrive.require_consistent`)."""
+    try:
+        drive.require_consistent()
+    except InputError:
+        return False
+    return True
 
 
 def misfit_caveat(whiteness: dict) -> str:

@@ -275,8 +275,9 @@ def locked_metrics(names, torque, twist, levels, n, T1, T2, rated_torque) -> dic
             K1, K2, K3, phi_rated = stiffness_fit(torque, twist, levels, n, T1, T2, rated_torque)
             out.update(K1_Nm_per_rad=K1, K2_Nm_per_rad=K2, K3_Nm_per_rad=K3,
                        torsion_at_rated_arcmin=rad_to_arcmin(phi_rated))
-            out["torsion_at_rated_tip_arcmin"] = rad_to_arcmin(
-                torsion_at_rated_tips(torque, twist, levels, n, rated_torque))
+            if amplitude >= 1.0:  # a cycle short of T_N has no twist at T_N to report: the figure is absent
+                out["torsion_at_rated_tip_arcmin"] = rad_to_arcmin(
+                    torsion_at_rated_tips(torque, twist, levels, n, rated_torque))
         else:
             raise ValueError(f"unknown metric group {name}")
     return out
