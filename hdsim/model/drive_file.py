@@ -4,7 +4,7 @@ A drive file is a small TOML file; `hdsim.model.catalog.load_unit` reads one whe
 it is given a path instead of a built-in unit name::
 
     name = "ZXF17-50"
-    ratio = 50                      # required
+    ratio = 50                      # required, 30-320
     rated_torque_Nm = 16.0          # required
     T1_Nm = 3.9                     # the catalog three-segment stiffness law: any subset
     T2_Nm = 12.0
@@ -86,6 +86,7 @@ import numpy as np
 from hdsim.errors import InputError, unknown_name
 from hdsim.model import datasheet
 from hdsim.model.drive import HarmonicDrive
+from hdsim.model.drive_file_checks import check_teeth_and_material, refuse_other_file_kinds
 from hdsim.model.geometry import FlexsplineGeometry
 from hdsim.model.parameters import not_whole
 from hdsim.units import arcmin_to_rad, rad_to_arcmin
@@ -93,7 +94,7 @@ from hdsim.units import arcmin_to_rad, rad_to_arcmin
 #: top-level keys: (unit, required, meaning); the datasheet figures in catalog order
 KEYS = {
     "name": ("", True, "name of the drive, as its maker names it"),
-    "ratio": ("-", True, "transmission ratio N (positive; 2N flexspline teeth)"),
+    "ratio": ("-", True, "transmission ratio N (30-320; 2N flexspline teeth)"),
     "rated_torque_Nm": ("N·m", True, "rated output torque T_N"),
     "T1_Nm": ("N·m", False, "first breakpoint torque of the three-segment stiffness law"),
     "T2_Nm": ("N·m", False, "second breakpoint torque"),
@@ -143,10 +144,12 @@ def read_drive_file(path: str | os.PathLike) -> dict:
     Raises
     ------
     InputError
-        One line naming the file (and the key) for a missing file, malformed TOML, an
-        unknown key, a wrong type, a value that is not a positive finite number, a ratio
-        whose 2N teeth are not a whole number, ``T1 >= T2`` or a stiffness that falls with
-        load (K1 > K2 or K2 > K3).
+        One line naming the file (and the key) for a missing file, malformed TOML, a fit
+        or scenario file, an unknown key, a wrong type, a value that is not a positive
+        finite number, a ratio outside 30-320 (``ratio_range`` in hdsim/data/units.toml)
+        or whose 2N teeth are not a whole number, ``[flexspline]`` teeth other than 2N, a
+        modulus above 500 GPa, ``T1 >= T2`` or a stiffness that falls with load (K1 > K2
+        or K2 > K3).
     """
     source = _label(path)
     try:
@@ -208,9 +211,7 @@ def check_table(table: dict, source: str) -> dict:
     InputError
         As `read_drive_file`.
     """
-    if table.get("format") == "hdsim-fit-1":
-        raise InputError(f"{source}: an hdsim fit file, not a drive file; load it with "
-                         "hdsim.identification.fit.load_fitted ('hdsim sobol --unit' takes both)")
+    refuse_other_file_kinds(table, source)
     known = list(KEYS) + ["flexspline"]
     for key in table:
         if key not in known:
@@ -224,8 +225,10 @@ def check_table(table: dict, source: str) -> dict:
         raise InputError(f"{source}: name must be a non-empty one-line string, got {name!r}")
     out = {"name": name.strip()}
     out.update({key: _number(source, key, table[key]) for key in KEYS if key != "name" and key in table})
-    if out["ratio"] < 1.0:
-        raise InputError(f"{source}: ratio must be at least 1, got {out['ratio']:g}")
+    low, high = datasheet._data()["drive_file"]["ratio_range"]
+    if not low <= out["ratio"] <= high:
+        raise InputError(f"{source}: ratio = {out['ratio']:g} is outside {low:g}-{high:g}, the ratios strain-wave "
+                         "gears are made in (fewer teeth deflect the flexspline too far: one module = d/2N)")
     if not_whole(2.0 * out["ratio"]):  # the assumed proportions have 2N teeth (two-lobe wave generator)
         raise InputError(f"{source}: ratio = {out['ratio']:.12g} means {2.0 * out['ratio']:.12g} flexspline teeth (2N), "
                          "not a whole number; expected a ratio in steps of 0.5")
@@ -238,6 +241,7 @@ def check_table(table: dict, source: str) -> dict:
             if key not in allowed:
                 raise InputError(f"{source}: {unknown_name('flexspline dimension', key, allowed)}")
         out["flexspline"] = {key: _number(source, f"flexspline.{key}", v) for key, v in dims.items()}
+        check_teeth_and_material(out, source)
     if "T1_Nm" in out and "T2_Nm" in out and out["T1_Nm"] >= out["T2_Nm"]:
         raise InputError(f"{source}: T1_Nm = {out['T1_Nm']:g} must be below T2_Nm = {out['T2_Nm']:g} N·m")
     given = [k for k in STIFFNESS_KEYS if k in out]
@@ -561,7 +565,8 @@ def template() -> str:
              "# Use it wherever a built-in unit is accepted: hdsim simulate lost_motion --unit this.toml",
              "# Required keys are set below; remove the '# ' in front of an optional key to give it.",
              f"# Whatever is not given is scaled from the nearest built-in unit (values shown: {name}).",
-             "# Units are in the key names; lengths in [flexspline] are in metres.", ""]
+             "# Units are in the key names; lengths in [flexspline] are in metres, E in Pa.",
+             ""]
     for key, (unit, required, meaning) in KEYS.items():
         value = example[key]
         text = f'"{value}"' if isinstance(value, str) else f"{value:.6g}"
@@ -575,6 +580,6 @@ def template() -> str:
     meta = {f.name: f.metadata for f in fields(FlexsplineGeometry)}
     for key in flexspline_keys():
         line = f"# {key} = {float(geometry[key]):.6g}"
-        note = {"teeth": ", default 2 × ratio", "module": ", default pitch diameter / teeth"}.get(key, "")
+        note = {"teeth": ", 2 × ratio", "module": ", default pitch diameter / teeth"}.get(key, "")
         lines.append(f"{line:<34} # {meta[key]['doc']} [{meta[key]['unit']}{note}]")
     return "\n".join(lines) + "\n"

@@ -1,0 +1,91 @@
+"""What a drive file may hold beyond its geometry: the ratio, the teeth, the modulus, its kind.
+
+A ratio no strain-wave gear has, teeth that contradict the ratio, a modulus stiffer than any
+material, a scenario or fit file given as the unit: each is refused with one line that names
+the file, the key and the value given (docs/cli.md, "Your own drive: a drive file").
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from hdsim.errors import InputError
+from hdsim.model.catalog import load_unit
+
+#: the docs' example drive (docs/cli.md), without its optional figures
+HEAD = 'name = "ZXF17-50"\nratio = 50\nrated_torque_Nm = 16.0\n'
+REPO = Path(__file__).resolve().parents[1]
+
+
+def refusal(tmp_path, text: str) -> str:
+    """The one-line refusal of a drive file holding ``text``; it names the file."""
+    path = tmp_path / "drive.toml"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(InputError) as info:
+        load_unit(path)
+    message = str(info.value)
+    assert "\n" not in message and message.startswith(str(path)), message
+    return message
+
+
+# ------------------------------------------------------------------- the modulus
+
+
+def test_a_modulus_stiffer_than_any_material_is_refused_in_a_drive_file(tmp_path):
+    # the geometry stops only at the rigid limit a fit may use (5e17 Pa); no datasheet gives that
+    message = refusal(tmp_path, HEAD + "[flexspline]\nE = 1e12\n")
+    assert "flexspline.E = 1e+12 Pa is above 500 GPa" in message, message
+
+
+# ------------------------------------------------------------------- ratio and teeth
+
+
+@pytest.mark.parametrize("ratio", ["1", "1.5", "5", "20", "10000"])
+def test_a_ratio_no_strain_wave_gear_has_is_refused_by_name(tmp_path, ratio):
+    # ratio 1 had been refused as "R_i must be a positive finite number, got -0.007 m",
+    # ratio 2 as an end radius that does not fit, and ratio 5 (10 teeth) accepted
+    message = refusal(tmp_path, f'name = "X"\nratio = {ratio}\nrated_torque_Nm = 16.0\n')
+    assert f"ratio = {float(ratio):g} is outside 30-320" in message, message
+
+
+@pytest.mark.parametrize("ratio", ["30", "320"])
+def test_the_ends_of_the_ratio_range_load(tmp_path, ratio):
+    path = tmp_path / "end.toml"
+    path.write_text(f'name = "X"\nratio = {ratio}\nrated_torque_Nm = 16.0\n', encoding="utf-8")
+    assert float(load_unit(path).drive.ratio) == float(ratio)
+
+
+@pytest.mark.parametrize("teeth", ["99", "102", "101.5"])
+def test_teeth_that_contradict_the_ratio_are_refused(tmp_path, teeth):
+    message = refusal(tmp_path, HEAD + f"[flexspline]\nteeth = {teeth}\n")
+    assert f"flexspline.teeth = {float(teeth):g} contradicts ratio = 50" in message, message
+    assert "2N = 100" in message, message
+
+
+def test_teeth_of_the_ratio_load(tmp_path):
+    path = tmp_path / "teeth.toml"
+    path.write_text(HEAD + "[flexspline]\nteeth = 100\n", encoding="utf-8")
+    assert float(load_unit(path).geometry.teeth) == 100.0
+
+
+# ------------------------------------------------------------------- other files
+
+
+def test_a_scenario_file_given_as_the_unit_says_so(tmp_path):
+    # it had been refused as "unknown drive file key 'description'; did you mean ratio?"
+    path = REPO / "scenarios" / "stiffness.toml"
+    with pytest.raises(InputError, match=r"a scenario file \(setup = 'locked_wave_generator'\), not a drive file"):
+        load_unit(path)
+
+
+def test_a_scenario_file_given_to_the_cli_as_the_unit_exits_2(cli, tmp_path):
+    path = REPO / "scenarios" / "stiffness.toml"
+    code, out, err = cli("simulate", "stiffness", "--unit", path, "--json", cwd=tmp_path)
+    assert code == 2 and out == "" and "a scenario file" in err and "did you mean" not in err, err
+
+
+def test_a_running_torque_fit_given_as_the_unit_says_so(tmp_path):
+    message = refusal(tmp_path, 'format = "hdsim-running-fit-1"\ntest = "running_torque"\n')
+    assert "running-torque fit file" in message, message
