@@ -89,3 +89,19 @@ def test_a_scenario_file_given_to_the_cli_as_the_unit_exits_2(cli, tmp_path):
 def test_a_running_torque_fit_given_as_the_unit_says_so(tmp_path):
     message = refusal(tmp_path, 'format = "hdsim-running-fit-1"\ntest = "running_torque"\n')
     assert "running-torque fit file" in message, message
+
+
+# ------------------------------------------------------------------- breakpoints above T_N
+
+
+def test_breakpoints_above_the_rated_torque_are_kept_and_the_template_says_what_to_do(tmp_path):
+    """The maker lists one T1, T2 per size for every ratio (Harmonic Drive size 14: T2 = 6.9 N·m,
+    rated 5.4 N·m at ratio 50), so a drive file keeps a T2 above T_N; the ±T_N stiffness test
+    does not reach it, and the template says how to make it (docs/cli.md)."""
+    from hdsim.model.drive_file import template
+
+    path = tmp_path / "low.toml"
+    path.write_text(HEAD + "T1_Nm = 3.9\nT2_Nm = 40\n", encoding="utf-8")
+    assert float(load_unit(path).hardening.T2) == 40.0
+    text = template()
+    assert "T1, T2 above rated_torque_Nm are kept" in text and "--set scenario.load.amplitude=" in text

@@ -44,6 +44,8 @@ what the file does not give comes from the built-in units (`reference`):
    reference's ratio to it, a missing K2 between given K1 and K3 where the reference's
    K2 lies between its K1 and K3 on a log scale. The reference stiffness is that of ratio
    100 (the makers list other K1-K3 for low ratios: give them for a drive below ratio 80).
+   Breakpoints above T_N are kept: the makers list one T1, T2 per size for every ratio
+   while the rating falls with the ratio, so at ratio 30 T2 lies above T_N.
 4. **Lost motion** L (the ±4 % T_N test, full span) is the elastic span ``0.08 T_N/K1``
    plus the dead zone plus a small micro-slip share (docs/physics.md §13); a given L
    sets the dead zone: the gap whose quasi-static angle at ±0.04 T_N adds
@@ -97,7 +99,7 @@ KEYS = {
     "ratio": ("-", True, "transmission ratio N (30-320; 2N flexspline teeth)"),
     "rated_torque_Nm": ("N·m", True, "rated output torque T_N"),
     "T1_Nm": ("N·m", False, "first breakpoint torque of the three-segment stiffness law"),
-    "T2_Nm": ("N·m", False, "second breakpoint torque"),
+    "T2_Nm": ("N·m", False, "second breakpoint torque (may exceed T_N at low ratios)"),
     "K1_Nm_per_rad": ("N·m/rad", False, "torsional stiffness from 0 to T1"),
     "K2_Nm_per_rad": ("N·m/rad", False, "torsional stiffness from T1 to T2"),
     "K3_Nm_per_rad": ("N·m/rad", False, "torsional stiffness above T2"),
@@ -566,7 +568,9 @@ def template() -> str:
              "# Required keys are set below; remove the '# ' in front of an optional key to give it.",
              f"# Whatever is not given is scaled from the nearest built-in unit (values shown: {name}).",
              "# Units are in the key names; lengths in [flexspline] are in metres, E in Pa.",
-             ""]
+             "# T1, T2 above rated_torque_Nm are kept (low-ratio datasheets list the size's breakpoints):",
+             "# the stiffness test, loaded to ±T_N, measures no K above them: raise its load amplitude",
+             "# (hdsim simulate stiffness --unit this.toml --set scenario.load.amplitude=3).", ""]
     for key, (unit, required, meaning) in KEYS.items():
         value = example[key]
         text = f'"{value}"' if isinstance(value, str) else f"{value:.6g}"
