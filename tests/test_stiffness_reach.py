@@ -90,3 +90,18 @@ def test_the_cli_refuses_the_stiffness_metrics_of_the_lost_motion_cycle_in_one_l
     assert code == 2 and out == ""
     assert len(err.strip().splitlines()) == 1 and "load.amplitude above T2/T_N" in err
     assert not (tmp_path / "o" / "lost_motion.h5").exists()
+
+
+def test_a_breakpoint_above_the_rated_torque_leaves_its_segment_out_and_the_torsion_at_rated_measured():
+    """A datasheet's T2 above T_N (a low ratio's) made K3 and the torsion at T_N NaN, so the
+    command refused the run (`hdsim demo` on such a drive file exited 2). K3 is now absent
+    and the torsion at T_N reads the two segments below T_N: T1/K1 + (T_N − T1)/K2."""
+    drive = load_unit("CSG-25-100")
+    rated = float(drive.drive.rated_torque)
+    high = drive.with_updates({"hardening.T2": 1.3 * rated})
+    run = run_scenario(high, load_scenario("stiffness"), evaluator="quasistatic")
+    assert "K3_Nm_per_rad" not in run.metrics
+    T1 = float(high.params()["hardening.T1"])
+    K1, K2 = run.metric("K1_Nm_per_rad"), run.metric("K2_Nm_per_rad")
+    law = T1 / K1 + (rated - T1) / K2
+    assert run.metric("torsion_at_rated_arcmin") == pytest.approx(law * 60 * 180 / np.pi, rel=1e-9)

@@ -56,9 +56,12 @@ def main(args) -> int:
             ("hysteresis loss after ±T_N", summary["hysteresis_loss_arcmin"], "arcmin", "catalog class ~1"),
             ("torsion at T_N (fitted law)", summary["torsion_at_rated_arcmin"], "arcmin", ""),
             ("K1", summary["K1_Nm_per_rad"], "N·m/rad", f"catalog {catalog['K1']:.3g}"),
-            ("K2", summary["K2_Nm_per_rad"], "N·m/rad", f"catalog {catalog['K2']:.3g}"),
-            ("K3", summary["K3_Nm_per_rad"], "N·m/rad", f"catalog {catalog['K3']:.3g}")]
+            ("K2", summary.get("K2_Nm_per_rad"), "N·m/rad", f"catalog {catalog['K2']:.3g}"),
+            ("K3", summary.get("K3_Nm_per_rad"), "N·m/rad", f"catalog {catalog['K3']:.3g}")]
     for label, value, unit, note in rows:
+        if value is None:  # a segment above the ±T_N cycle (a breakpoint above the rated torque)
+            print(f"  {label:<40} {'not reached':>10} {unit:<8} {note}: the ±T_N cycle stays below its breakpoint")
+            continue
         print(f"  {label:<40} {value:>10.4g} {unit:<8} {note}")
     print(f"figures and results in {out}/ ({seconds:.1f} s)")
     return 0

@@ -54,8 +54,9 @@ def plot_loop(run, ax=None, window_fraction: float = 0.04, sample: int = 0):
         ax.set_title(f"lost motion {run.metric('lost_motion_arcmin', sample):.3f} arcmin "
                      f"(±{window_fraction:.0%} T_N, full span)")
     elif "K1_Nm_per_rad" in run.metrics:
-        ax.set_title(f"K1 {run.metric('K1_Nm_per_rad', sample):.3g}, K2 {run.metric('K2_Nm_per_rad', sample):.3g}, "
-                     f"K3 {run.metric('K3_Nm_per_rad', sample):.3g} N·m/rad")
+        # a segment the cycle does not load into is absent from the metrics
+        ax.set_title(", ".join(f"{k} {run.metric(f'{k}_Nm_per_rad', sample):.3g}" for k in ("K1", "K2", "K3")
+                               if f"{k}_Nm_per_rad" in run.metrics) + " N·m/rad")
     ax.axhline(0, color="0.6", lw=0.6)
     ax.axvline(0, color="0.6", lw=0.6)
     ax.set_xlabel("twist [arcmin]")

@@ -231,7 +231,11 @@ def stiffness_fit(torque, twist, levels, n, T1, T2, rated_torque):
             raise InputError(reason + (f" (sample {m} of the batch)" if M > 1 else ""))
         keep = load >= 0.5 * T1[m]
         K1, K2, K3, _ = fit_three_segment(load[keep], phi[keep], T1[m], T2[m])
-        out[:, m] = K1, K2, K3, three_segment_twist(TN[m], T1[m], T2[m], K1, K2, K3)
+        # the twist at T_N needs only the segments below T_N: one T_N does not reach (a
+        # datasheet's T2 above its rated torque, as at a low ratio) is not read, not NaN
+        K2_used = K2 if TN[m] > T1[m] else np.inf
+        K3_used = K3 if TN[m] > T2[m] else np.inf
+        out[:, m] = K1, K2, K3, three_segment_twist(TN[m], T1[m], T2[m], K1, K2_used, K3_used)
     return out
 
 
@@ -273,8 +277,14 @@ def locked_metrics(names, torque, twist, levels, n, T1, T2, rated_torque) -> dic
                 lost_motion_centre_line(torque, twist, levels, n, level))
         elif name == "stiffness":
             K1, K2, K3, phi_rated = stiffness_fit(torque, twist, levels, n, T1, T2, rated_torque)
-            out.update(K1_Nm_per_rad=K1, K2_Nm_per_rad=K2, K3_Nm_per_rad=K3,
-                       torsion_at_rated_arcmin=rad_to_arcmin(phi_rated))
+            # a segment no sample's cycle loads into is absent (one NaN figure made the command
+            # refuse the run: `hdsim demo` on a ratio-30 drive file, whose T2 lies above T_N); a
+            # batch whose samples differ keeps NaN where one sample stops short
+            peak = amplitude * np.asarray(rated_torque, dtype=float)
+            figures = {"K1_Nm_per_rad": K1, "K2_Nm_per_rad": K2 if np.any(np.asarray(T1) < peak) else None,
+                       "K3_Nm_per_rad": K3 if np.any(np.asarray(T2) < peak) else None,
+                       "torsion_at_rated_arcmin": rad_to_arcmin(phi_rated)}
+            out.update({name: value for name, value in figures.items() if value is not None})
             if amplitude >= 1.0:  # a cycle short of T_N has no twist at T_N to report: the figure is absent
                 out["torsion_at_rated_tip_arcmin"] = rad_to_arcmin(
                     torsion_at_rated_tips(torque, twist, levels, n, rated_torque))
