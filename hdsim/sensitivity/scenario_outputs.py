@@ -25,6 +25,7 @@ from dataclasses import dataclass, fields, is_dataclass
 import numpy as np
 
 from hdsim.errors import InputError, SolverError, unknown_name
+from hdsim.model.catalog import as_drive as catalog_drive
 from hdsim.model.catalog import load_unit
 from hdsim.model.drive import HarmonicDrive
 from hdsim.model.geometry import FlexsplineGeometry
@@ -57,28 +58,9 @@ TASK_BYTES = 1e9
 
 
 def as_drive(drive) -> HarmonicDrive:
-    """The model to study: a `HarmonicDrive` as it is, a name (or None) through `load_unit`.
-
-    Parameters
-    ----------
-    drive : HarmonicDrive, str or None
-        A model object (built-in, modified with ``with_updates``, fitted), the name of
-        a built-in unit (None: the default unit) or the path of a drive file.
-
-    Returns
-    -------
-    HarmonicDrive
-
-    Raises
-    ------
-    InputError
-        On an unknown unit name or an object that is not a drive.
-    """
-    if isinstance(drive, HarmonicDrive):
-        return drive
-    if drive is None or isinstance(drive, str):
-        return load_unit(drive)
-    raise InputError(f"expected a HarmonicDrive or a unit name, got {type(drive).__name__}")
+    """The model to study: `hdsim.model.catalog.as_drive` (a `HarmonicDrive` as it is, a unit
+    name or a drive file's path through `load_unit`), and None for the default unit."""
+    return load_unit(None) if drive is None else catalog_drive(drive)
 
 
 def drive_fingerprint(drive: HarmonicDrive, scenario: Scenario | None = None, evaluator: str = "dynamic") -> str:
