@@ -37,3 +37,17 @@ def test_one_sample_of_a_batch_that_slides_keeps_the_batch_dynamic():
     assert quasistatic_criterion(batch, LOST_MOTION)[0]
     batch = DRIVE.with_updates({"friction.slip_torque": np.array([2.0, 0.9]) * PEAK})
     assert not quasistatic_criterion(batch, LOST_MOTION)[0]
+
+
+def test_a_study_whose_range_reaches_below_the_peak_keeps_the_dynamic_model():
+    """The criterion had been judged on the nominal drive alone (5.22 N·m, which sticks), so a
+    study of the slip torque over 1.5-6 N·m ran quasi-statically and found S1 = ST = 0 for it
+    where solve_ivp gives nearly 1; it is judged at the ends of the ranges too."""
+    from hdsim.sensitivity.models import from_unit
+
+    func, *_ = from_unit("CSG-25-100", ["friction.slip_torque"], "lost_motion_arcmin",
+                         bounds={"friction.slip_torque": (1.5, 6.0)})
+    assert func.evaluator == "dynamic" and "friction.slip_torque = 1.5, an end of its range" in func.choice["reason"]
+    func, *_ = from_unit("CSG-25-100", ["friction.slip_torque", "h_c"], "lost_motion_arcmin",
+                         bounds={"friction.slip_torque": (4.0, 6.0)}, range_frac=0.1)
+    assert func.evaluator == "quasistatic"

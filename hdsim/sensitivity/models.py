@@ -71,7 +71,8 @@ def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, 
     # a built-in name travels as a name; anything else (a drive file too) as the model read
     # here, so the workers neither re-read a file nor depend on the working folder
     by_name = isinstance(unit, str) and "drive_file" not in drive.provenance
-    func = batch.model_function(unit if by_name else drive, list(names), output, scenario, evaluator, wording)
+    func = batch.model_function(unit if by_name else drive, list(names), output, scenario, evaluator, wording,
+                                range_ends=_range_end_drives(drive, problem, dotted))
     model = {"unit": drive.name, "output": output, "scenario": _recorded_scenario(output, scenario, func.scenario),
              "fingerprint": batch.drive_fingerprint(drive, func.scenario, func.evaluator),
              "evaluator": func.evaluator}
@@ -126,9 +127,7 @@ def _refuse_unbuildable_ends(drive, problem, dotted: list) -> None:
     studied range (an undercut range below the nominal undercut) is no row of the study,
     and had refused a box whose every corner builds. (A combination of ends may still fail;
     those blocks are counted.)"""
-    spans = [_span(low, high, dist) for (low, high), dist in zip(problem.bounds, problem.dists)]
-    nominal = _batch().nominal_values(drive, dotted)
-    start = [min(max(nominal[key], lo), hi) for key, (lo, hi) in zip(dotted, spans)]
+    spans, start = _spans_and_start(drive, problem, dotted)
     for i, (name, (low, high), dist) in enumerate(zip(problem.names, problem.bounds, problem.dists)):
         if dist != "unif":
             continue
@@ -136,6 +135,27 @@ def _refuse_unbuildable_ends(drive, problem, dotted: list) -> None:
             reason = _refused_everywhere(drive, dotted, _trial_rows(spans, start, i, value))
             if reason is not None:
                 raise InputError(f"the range of {name} reaches {value:g}, a drive the model refuses: {reason}")
+
+
+def _range_end_drives(drive, problem, dotted: list):
+    """(name, value, drive) at each end of each input's span, the others at their nominal
+    values brought into their own ranges; an end the model refuses there is passed over
+    (`_refuse_unbuildable_ends` has judged it)."""
+    spans, start = _spans_and_start(drive, problem, dotted)
+    for i, name in enumerate(problem.names):
+        for value in spans[i]:
+            row = [*start[:i], value, *start[i + 1:]]
+            try:
+                yield name, value, drive.with_updates(dict(zip(dotted, row))).require_consistent()
+            except InputError:
+                continue
+
+
+def _spans_and_start(drive, problem, dotted: list) -> tuple[list, list]:
+    """Each input's span (`_span`) and its nominal value brought into it."""
+    spans = [_span(low, high, dist) for (low, high), dist in zip(problem.bounds, problem.dists)]
+    nominal = _batch().nominal_values(drive, dotted)
+    return spans, [min(max(nominal[key], lo), hi) for key, (lo, hi) in zip(dotted, spans)]
 
 
 #: rows tried for one range end at most: every corner of the other ranges up to ten

@@ -29,7 +29,7 @@ from hdsim.model.catalog import as_drive as catalog_drive
 from hdsim.model.catalog import load_unit
 from hdsim.model.drive import HarmonicDrive
 from hdsim.model.geometry import FlexsplineGeometry
-from hdsim.scenarios.evaluator import choose_evaluator
+from hdsim.scenarios.evaluator import EvaluatorChoice, choose_evaluator
 from hdsim.scenarios.registry import get_setup
 from hdsim.scenarios.run import run_scenario
 from hdsim.scenarios.scenario import Scenario, load_scenario
@@ -389,7 +389,7 @@ def series_function(drive, names, signal: str, scenario) -> ScenarioSeries:
 
 
 def model_function(drive, names, output: str, scenario=None, evaluator: str = "auto",
-                   wording: Wording = PYTHON_WORDING) -> ScenarioMetric:
+                   wording: Wording = PYTHON_WORDING, range_ends=()) -> ScenarioMetric:
     """The study callable for ``output`` of ``scenario`` on ``drive``.
 
     Parameters
@@ -404,9 +404,13 @@ def model_function(drive, names, output: str, scenario=None, evaluator: str = "a
         A scenario, a built-in scenario name or a scenario file; default the built-in
         scenario producing ``output`` (`hdsim.sensitivity.metric_scenarios.default_scenario`).
     evaluator : {"auto", "dynamic", "quasistatic"}
-        `hdsim.scenarios.evaluator`; "auto" decides once, on the nominal drive.
+        `hdsim.scenarios.evaluator`; "auto" decides once, on the nominal drive and on
+        ``range_ends``.
     wording : Wording
         How a refusal names the options (``scenario=``, or the command line's ``--scenario``).
+    range_ends : iterable of (str, float, HarmonicDrive)
+        Single drives at the ends of the studied ranges (name, value, drive): "auto" keeps
+        the dynamic model if the criterion fails at any of them.
 
     Returns
     -------
@@ -424,7 +428,17 @@ def model_function(drive, names, output: str, scenario=None, evaluator: str = "a
         scenario = default_scenario(output, wording)
     resolved = load_scenario(scenario)  # fails early with a clear message
     model = _single(drive)
-    choice = choose_evaluator(get_setup(resolved.setup), model, resolved, evaluator)
+    setup = get_setup(resolved.setup)
+    choice = choose_evaluator(setup, model, resolved, evaluator)
+    for name, value, end in range_ends if choice.requested == "auto" and choice.chosen == "quasistatic" else ():
+        # the criterion can fail inside the box while the nominal drive passes it (a micro-slip
+        # slider whose slip torque range reaches below the cycle's peak): the study is judged
+        # at the ends of its ranges too, where such a limit is crossed first
+        holds, reason, _ = setup.quasistatic_criterion(end, resolved)
+        if not holds:
+            choice = EvaluatorChoice("auto", "dynamic", f"at {name} = {value:g}, an end of its range: {reason}",
+                                     choice.figures)
+            break
     # a scenario named may not report the output, and a forced quasi-static evaluator may not
     # run the scenario (a motor loop, metric groups it has no signals for): either is refused
     # here, with run_scenario's reason, not after every row of the study has failed on it
