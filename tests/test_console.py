@@ -87,3 +87,14 @@ def test_diagnose_module_exit_status(tmp_path):
     assert p.returncode == 2 and p.stdout == ""
     assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
     assert sorted(x.name for x in tmp_path.iterdir()) == ["bad.csv"]
+
+
+def test_a_reader_that_stops_reading_is_no_internal_error():
+    """`hdsim units | true` said "internal error: BrokenPipeError ... a bug in hdsim" (exit 1)
+    every time: the reader closing the pipe is neither bad input nor a failure of hdsim."""
+    import subprocess
+    import sys
+
+    done = subprocess.run(["bash", "-c", f"set -o pipefail; '{sys.executable}' -m hdsim units | true"],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0 and "internal error" not in done.stderr, done.stderr

@@ -121,6 +121,12 @@ def _dispatch(args, debug: bool) -> int:
             raise
         print(f"hdsim {args.verb}: error: {_one_line(exc)}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        # the reader stopped reading (`hdsim units | head -1`): neither the input's fault nor the
+        # program's. Python's own advice: point stdout at devnull, so that flushing it at exit
+        # does not fail again, and end quietly
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     except OSError as exc:
         # a folder without permission, a read-only or full disk: the machine the user must
         # fix, said in one line (exit 2); any other OSError is the program's failure (below)
