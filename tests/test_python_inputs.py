@@ -72,3 +72,18 @@ def test_a_value_that_is_no_number_is_refused_by_name_and_type(name, value, told
 @pytest.mark.parametrize("value", [6e-4, np.float32(6e-4), [5e-4, 6e-4], np.array([5e-4, 6e-4])])
 def test_numbers_and_arrays_of_numbers_still_build(value):
     assert np.allclose(UNIT.with_updates({"flexspline.h_c": value}).geometry.h_c, value)
+
+
+@pytest.mark.parametrize("call, words", [
+    (lambda d: d.without("frction"), "unknown effect family 'frction'; did you mean friction"),
+    (lambda d: d.with_updates([("flexspline.h_c", 1e-3)]), "updates are a dict of dotted names and values"),
+    (lambda d: __import__("hdsim").run_scenario(d, 42), "a scenario is a Scenario, a built-in scenario name"),
+])
+def test_a_call_given_the_wrong_kind_of_thing_is_one_input_error(call, words):
+    """A KeyError, an AttributeError and a TypeError (an internal error to the user) had come
+    from a misspelt family for without(), a list for with_updates() and a number for a scenario."""
+    from hdsim.errors import InputError
+    from hdsim.model.catalog import load_unit
+
+    with pytest.raises(InputError, match=words):
+        call(load_unit("CSG-25-100"))

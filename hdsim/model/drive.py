@@ -11,6 +11,7 @@ integrates for all parameter sets at once.
 from __future__ import annotations
 
 import functools
+from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, replace
 from typing import ClassVar
 
@@ -238,6 +239,9 @@ class HarmonicDrive:
 
     def without(self, *families) -> "HarmonicDrive":
         """A new model with the named families switched to their "no effect"."""
+        for family in families:
+            if family not in fx.NO_EFFECT:
+                raise unknown_name("effect family", family, fx.NO_EFFECT)
         return self.with_effects(**{f: fx.NO_EFFECT[f] for f in families})
 
     def with_input_friction(self, law: InputFriction) -> "HarmonicDrive":
@@ -283,6 +287,9 @@ class HarmonicDrive:
             (naming the parameter and the value's type), a value outside its bounds, or
             batch arrays of different lengths.
         """
+        if not isinstance(updates, Mapping):
+            raise InputError(f"updates are a dict of dotted names and values, e.g. {{'flexspline.h_c': 6e-4}}, "
+                             f"got {type(updates).__name__}")
         known = _dotted_names(tuple((prefix, type(part)) for prefix, part in self._parts().items()))
         grouped: dict[str, dict] = {}
         for name, value in updates.items():

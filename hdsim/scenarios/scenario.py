@@ -24,6 +24,7 @@ built-in scenario file (``lost_motion``, ``stiffness``, …, `builtin_scenario_n
 from __future__ import annotations
 
 import copy
+import os
 import tomllib
 from dataclasses import dataclass
 from importlib import resources
@@ -254,6 +255,9 @@ def load_scenario(scenario) -> Scenario:
     """
     if isinstance(scenario, Scenario):
         return scenario
+    if not isinstance(scenario, (str, os.PathLike)):
+        raise InputError(f"a scenario is a Scenario, a built-in scenario name or a scenario file's path, "
+                         f"got {type(scenario).__name__}")
     path = Path(scenario)
     try:
         is_file, exists = path.is_file(), path.exists()
