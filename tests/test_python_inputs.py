@@ -87,3 +87,15 @@ def test_a_call_given_the_wrong_kind_of_thing_is_one_input_error(call, words):
 
     with pytest.raises(InputError, match=words):
         call(load_unit("CSG-25-100"))
+
+
+def test_a_drive_file_given_as_the_scenario_is_named_as_one(tmp_path):
+    """It said "unknown key 'ratio'; did you mean description?", pointing the wrong way."""
+    import hdsim
+    from hdsim.errors import InputError
+    from hdsim.model.catalog import load_unit
+
+    path = tmp_path / "zxf17-50.toml"
+    path.write_text('name = "ZXF17-50"\nratio = 50\nrated_torque_Nm = 16.0\n')
+    with pytest.raises(InputError, match="a drive or fit file, not a scenario: give it as the unit"):
+        hdsim.run_scenario(load_unit("CSG-25-100"), path)

@@ -59,6 +59,11 @@ class Scenario:
     def __post_init__(self):
         # validation coerces values in place: work on our own copy, never the caller's dict
         object.__setattr__(self, "data", copy.deepcopy(self.data))
+        if "setup" not in self.data and {"ratio", "rated_torque_Nm", "format"} & set(self.data):
+            # a drive or fit file given where a scenario goes: "unknown key 'ratio'; did you mean
+            # description?" had pointed the wrong way
+            raise InputError(f"{self.source}: a drive or fit file, not a scenario: give it as the unit "
+                             "(--unit FILE on the command line, the drive in Python)")
         if not isinstance(self.data.get("name"), str):
             raise InputError(f"{self.source}: missing 'name'")
         _check_name(self.data["name"], self.source)
