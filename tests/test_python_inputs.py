@@ -99,3 +99,15 @@ def test_a_drive_file_given_as_the_scenario_is_named_as_one(tmp_path):
     path.write_text('name = "ZXF17-50"\nratio = 50\nrated_torque_Nm = 16.0\n')
     with pytest.raises(InputError, match="a drive or fit file, not a scenario: give it as the unit"):
         hdsim.run_scenario(load_unit("CSG-25-100"), path)
+
+
+def test_a_quasi_static_refusal_speaks_in_python_words_from_python():
+    """It named the command line's option (--evaluator dynamic or auto) to a Python caller; the
+    command line still says its option (hdsim.cli translates it)."""
+    import hdsim
+    from hdsim.errors import InputError
+    from hdsim.model.catalog import load_unit
+
+    with pytest.raises(InputError, match=r"\(evaluator='dynamic' or 'auto'\)") as caught:
+        hdsim.run_scenario(load_unit("CSG-25-100"), "reversal", evaluator="quasistatic")
+    assert "--evaluator" not in str(caught.value)

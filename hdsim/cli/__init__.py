@@ -119,7 +119,9 @@ def _dispatch(args, debug: bool) -> int:
     except (InputError, SolverError) as exc:
         if debug:
             raise
-        print(f"hdsim {args.verb}: error: {_one_line(exc)}", file=sys.stderr)
+        # the library names its keyword (evaluator='dynamic'); the command line says its option
+        message = _one_line(exc).replace(*_OPTION_WORDS[0])
+        print(f"hdsim {args.verb}: error: {message}", file=sys.stderr)
         return 2
     except BrokenPipeError:
         # the reader stopped reading (`hdsim units | head -1`): neither the input's fault nor the
@@ -153,7 +155,8 @@ _LIBRARIES = frozenset({"numpy", "scipy", "SALib", "h5py", "matplotlib", "numba"
 
 
 #: a library warning's advice in the Python API's words, and the same in the command's
-_OPTION_WORDS = (("evaluator='quasistatic'", "--evaluator quasistatic"), ("'auto'", "--evaluator auto"))
+_OPTION_WORDS = (("evaluator='dynamic' or 'auto'", "--evaluator dynamic or auto"),
+                 ("evaluator='quasistatic'", "--evaluator quasistatic"), ("'auto'", "--evaluator auto"))
 
 
 def hide_library_warnings(verb: str | None = None) -> None:

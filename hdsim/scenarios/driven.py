@@ -330,13 +330,13 @@ def run_driven_quasistatic(model: HarmonicDrive, scenario, *, samples_per_segmen
     if bench.mode != "prescribed":  # it would hold the motor on its reference: no following error at all
         raise InputError(f"{scenario.source}: the quasi-static evaluator moves the wave generator as "
                          f"prescribed; input.mode = \"{bench.mode}\" (a motor loop that yields) needs the "
-                         "dynamic model (--evaluator dynamic or auto)")
+                         "dynamic model (evaluator='dynamic' or 'auto')")
     # forced, it may run where its time scales do not hold; never for metrics it has no signals for
     # (a linearisation needs the states; a running torque, the input's dynamics)
     others = [g for g in bench.metrics if g not in QUASISTATIC_GROUPS]
     if others:
         raise InputError(f"{scenario.source}: the quasi-static evaluator does not compute the metric groups "
-                         f"{', '.join(others)}; they need the dynamic model (--evaluator dynamic or auto)")
+                         f"{', '.join(others)}; they need the dynamic model (evaluator='dynamic' or 'auto')")
     t_eval = bench.sample_times()
     refuse_if_too_large(scenario.source, samples=t_eval.size, duration=bench.t_end, batch=model.batch_size,
                         min_steps=t_eval.size, set_by="the input and load durations and the output sampling")
