@@ -36,7 +36,8 @@ def unknown_name(kind: str, name: str, known) -> InputError:
         The error to raise: ``unknown KIND 'NAME'; did you mean ...?`` or the known names.
     """
     known = sorted(known)
-    close = difflib.get_close_matches(name, known, n=3, cutoff=0.5)
+    # a dotted name given without its prefix (h_c for flexspline.h_c) is the closest match of all
+    close = [k for k in known if k.endswith("." + name)][:3] or difflib.get_close_matches(name, known, n=3, cutoff=0.5)
     hint = f"; did you mean {', '.join(close)}?" if close else f"; known: {', '.join(known)}"
     return InputError(f"unknown {kind} '{name}'{hint}")
 

@@ -111,3 +111,11 @@ def test_a_quasi_static_refusal_speaks_in_python_words_from_python():
     with pytest.raises(InputError, match=r"\(evaluator='dynamic' or 'auto'\)") as caught:
         hdsim.run_scenario(load_unit("CSG-25-100"), "reversal", evaluator="quasistatic")
     assert "--evaluator" not in str(caught.value)
+
+
+def test_a_dotted_name_given_without_its_prefix_is_suggested_with_it():
+    """`--set h_c=1e-3` listed every parameter the drive has instead of flexspline.h_c."""
+    from hdsim.errors import unknown_name
+
+    message = str(unknown_name("parameter", "h_c", ["flexspline.h_c", "flexspline.h_pz", "friction.slip_max"]))
+    assert message == "unknown parameter 'h_c'; did you mean flexspline.h_c?"
