@@ -105,3 +105,16 @@ def test_a_breakpoint_above_the_rated_torque_leaves_its_segment_out_and_the_tors
     K1, K2 = run.metric("K1_Nm_per_rad"), run.metric("K2_Nm_per_rad")
     law = T1 / K1 + (rated - T1) / K2
     assert run.metric("torsion_at_rated_arcmin") == pytest.approx(law * 60 * 180 / np.pi, rel=1e-9)
+
+
+def test_the_refusal_comes_before_the_run(monkeypatch):
+    """It came after the whole simulation; the cycle's amplitude and the breakpoints decide it."""
+    from hdsim.errors import InputError
+    from hdsim.scenarios import locked
+
+    def integrate(*args, **kwargs):
+        raise AssertionError("the run started")
+
+    monkeypatch.setattr(locked, "integrate", integrate)
+    with pytest.raises(InputError, match="never reaches"):
+        run_scenario(load_unit("CSG-25-100"), LOST_MOTION_STIFFNESS, evaluator="dynamic")

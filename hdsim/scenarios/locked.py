@@ -15,7 +15,7 @@ import numpy as np
 from hdsim.errors import InputError, SlowRunWarning
 from hdsim.model.drive import HarmonicDrive
 from hdsim.scenarios.limits import refuse_if_too_large
-from hdsim.scenarios.locked_metrics import METRIC_GROUPS, locked_metrics
+from hdsim.scenarios.locked_metrics import METRIC_GROUPS, locked_metrics, stiffness_fit_unreachable
 from hdsim.scenarios.setups import Setup
 from hdsim.simulation.driven import sample_model
 from hdsim.simulation.path import locked_wave_generator
@@ -132,6 +132,20 @@ def ramp_step_bound(scenario, options: SolverOptions | None) -> SolverOptions:
 MIN_PERIODS_PER_RAMP_RUN = 10.0
 
 
+def refuse_if_no_stiffness_fit(model: HarmonicDrive, scenario) -> None:
+    """Refuse, before the run, stiffness metrics that the cycle cannot give
+    (`stiffness_fit_unreachable`: the ±4 % cycle never loads to T1/2, where the fit starts)."""
+    if "stiffness" not in scenario.metrics:
+        return
+    T1, T2 = (np.broadcast_to(v, (model.batch_size,)) for v in breakpoints(model))
+    rated = np.broadcast_to(np.asarray(model.drive.rated_torque, dtype=float), (model.batch_size,))
+    for m in range(model.batch_size):
+        reason = stiffness_fit_unreachable(float(np.max(scenario.levels())), T1[m], T2[m], rated[m])
+        if reason:
+            raise InputError(f"{scenario.source}: {reason}" + (f" (sample {m} of the batch)" if model.batch_size > 1
+                                                               else ""))
+
+
 def refuse_if_not_static(model: HarmonicDrive, scenario) -> None:
     """Refuse a torque cycle loaded so fast that the test is no longer static (`InputError`,
     with the ramp, the mode's period and the fastest rate that stays static)."""
@@ -227,6 +241,7 @@ def run_locked(model: HarmonicDrive, scenario, *, samples_per_segment: int | Non
     options = ramp_step_bound(scenario, options)
     _refuse_if_too_large(scenario.source, scenario.data["load"], n, model.batch_size, options.max_step)
     refuse_if_not_static(model, scenario)
+    refuse_if_no_stiffness_fit(model, scenario)
     reason = slow_run_reason(model)
     if reason:
         warnings.warn(reason, SlowRunWarning, stacklevel=3)  # at the caller of run_scenario
@@ -308,6 +323,7 @@ def run_locked_quasistatic(model: HarmonicDrive, scenario, *, samples_per_segmen
     n = samples_per_segment or scenario.samples_per_segment
     _refuse_if_too_large(scenario.source, scenario.data["load"], n, model.batch_size)
     refuse_if_not_static(model, scenario)
+    refuse_if_no_stiffness_fit(model, scenario)
     every = int(np.ceil(QUASISTATIC_STEPS_PER_RAMP / n))
     steps = scenario.sample_times(n * every)
     shape = scenario.torque_profile(1.0)(steps)
