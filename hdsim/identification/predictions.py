@@ -208,9 +208,11 @@ def _metrics(model, coordinates, rows, scenario, metrics):
     from hdsim.scenarios.run import run_scenario
 
     size = 1 if rows is None else len(rows)
-    if rows is not None:
+    batch = model if rows is None else model.with_updates(coordinates.updates(rows))
+    if rows is not None and not _consistent(batch):
         # a draw whose values contradict each other (a hardening's T1 drawn above its T2) is no
-        # drive: run_scenario refuses the whole batch for it, so it is left out (NaN) instead
+        # drive: run_scenario refuses the whole batch for it, so it is left out (NaN) instead;
+        # the draws are judged one by one only when the batch holds such a draw
         kept = np.array([_consistent(model.with_updates(coordinates.updates(rows[i:i + 1]))) for i in range(size)])
         if not kept.all():
             values = _metrics(model, coordinates, rows[kept], scenario, metrics) if kept.any() else None
@@ -220,7 +222,6 @@ def _metrics(model, coordinates, rows, scenario, metrics):
             for full, part in zip(out, values):
                 full[kept] = part
             return out
-    batch = model if rows is None else model.with_updates(coordinates.updates(rows))
     try:
         run = run_scenario(batch, scenario, evaluator="quasistatic")
     except (InputError, SolverError):
