@@ -27,6 +27,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from hdsim.errors import InputError
+from hdsim.model.parameters import is_number
 from hdsim.signals import glitches
 
 __all__ = ["ImportOptions", "checked_options", "RowReport", "parse_window", "parse_meta", "split_factor", "apply_rows", "glitch_rows"]
@@ -75,7 +76,7 @@ class ImportOptions:
     def __post_init__(self):
         for name in ("ratio", "rated_torque", "sample_rate"):
             value = getattr(self, name)
-            if value is not None and not (_is_number(value) and math.isfinite(value) and value != 0):
+            if value is not None and not (is_number(value) and math.isfinite(value) and value != 0):
                 raise InputError(f"{name}: must be a finite non-zero number, got {value!r}")
         if self.rated_torque is not None and self.rated_torque < 0:
             raise InputError(f"rated_torque: must be positive, got {self.rated_torque!r}")
@@ -140,16 +141,12 @@ class RowReport:
     time_from_rows: bool = False
 
 
-def _is_number(value) -> bool:
-    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
-
-
 def _window(value) -> tuple[float, float]:
     """The ``window`` keyword as ``(T0, T1)`` [s]: a pair of numbers, ``None`` for an open side."""
     usage = "window: expected (T0, T1) in seconds, None for an open side, e.g. (2.5, 40) or (5, None)"
     if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != 2:
         raise InputError(f"{usage}; got {value!r}")
-    if not all(side is None or _is_number(side) for side in value):
+    if not all(side is None or is_number(side) for side in value):
         raise InputError(f"{usage}; got {value!r}")
     lo = -math.inf if value[0] is None else float(value[0])
     hi = math.inf if value[1] is None else float(value[1])

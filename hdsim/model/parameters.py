@@ -67,7 +67,7 @@ def count_fields(cls) -> tuple[tuple[str, str], ...]:
     return tuple((f.name, f.metadata["count"]) for f in fields(cls) if f.metadata.get("count"))
 
 
-def _is_number(value) -> bool:
+def is_number(value) -> bool:
     """Whether ``value`` is one real number (Python's or numpy's); a bool is not one."""
     return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
 
@@ -77,7 +77,7 @@ def _described(value) -> str:
     the first element that is no number."""
     if isinstance(value, (list, tuple, np.ndarray)):
         for element in (value.ravel() if isinstance(value, np.ndarray) else value):
-            if not _is_number(element):
+            if not is_number(element):
                 element = element.item() if isinstance(element, np.generic) else element
                 return f"{type(value).__name__} holding {type(element).__name__} {reprlib.repr(element)}"
     return f"{type(value).__name__} {reprlib.repr(value)}"

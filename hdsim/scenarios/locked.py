@@ -19,7 +19,7 @@ from hdsim.scenarios.locked_metrics import METRIC_GROUPS, locked_metrics, stiffn
 from hdsim.scenarios.setups import Setup
 from hdsim.simulation.driven import sample_model
 from hdsim.simulation.path import locked_wave_generator
-from hdsim.simulation.quasistatic import first_mode_period, locked_twist
+from hdsim.simulation.quasistatic import first_mode_period, locked_twist, sticking_tangent
 from hdsim.simulation.solver import SimulationResult, SolverOptions, integrate
 
 LOCKED_SETUP = "locked_wave_generator"
@@ -139,11 +139,13 @@ def refuse_if_no_stiffness_fit(model: HarmonicDrive, scenario) -> None:
         return
     T1, T2 = (np.broadcast_to(v, (model.batch_size,)) for v in breakpoints(model))
     rated = np.broadcast_to(np.asarray(model.drive.rated_torque, dtype=float), (model.batch_size,))
-    for m in range(model.batch_size):
-        reason = stiffness_fit_unreachable(float(np.max(scenario.levels())), T1[m], T2[m], rated[m])
-        if reason:
-            raise InputError(f"{scenario.source}: {reason}" + (f" (sample {m} of the batch)" if model.batch_size > 1
-                                                               else ""))
+    amplitude = float(scenario.data["load"]["amplitude"])
+    short = amplitude * rated <= 0.5 * T1  # the rule of `stiffness_fit_unreachable`, for every sample at once
+    if np.any(short):
+        m = int(np.argmax(short))
+        reason = stiffness_fit_unreachable(amplitude, T1[m], T2[m], rated[m])
+        raise InputError(f"{scenario.source}: {reason}" + (f" (sample {m} of the batch)" if model.batch_size > 1
+                                                           else ""))
 
 
 def refuse_if_not_static(model: HarmonicDrive, scenario) -> None:
@@ -190,10 +192,9 @@ def sticking_mode(model: HarmonicDrive) -> dict[str, float]:
     `SLOW_DAMPING_RATIO` (a stiffer sample may be damped enough while a softer one rings),
     else the one of largest ratio."""
     # a batch may vary the geometry, the friction or the damping: each broadcast to the batch
-    K = np.broadcast_to(np.asarray(model.base_stiffness, dtype=float), (model.batch_size,))
-    rest = np.zeros((len(model.friction.state_names), K.size))
-    tangent, J, c = (np.broadcast_to(np.asarray(value, dtype=float), K.shape) for value in (
-        model.friction.path_tangent(rest, 1.0, 0.0 * K, K), model.drive.J_out, model.damping.coefficient_at(1.0)))
+    K, tangent = sticking_tangent(model)
+    J, c = (np.broadcast_to(np.asarray(value, dtype=float), K.shape)
+            for value in (model.drive.J_out, model.damping.coefficient_at(1.0)))
     ratio = tangent / K
     damping = c / (2.0 * np.sqrt(tangent * J))
     ringing = damping < SLOW_DAMPING_RATIO

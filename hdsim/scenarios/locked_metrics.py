@@ -73,10 +73,16 @@ def lost_motion_full_span(twist, levels, n):
     numpy.ndarray, shape (M,)
         Lost motion [rad].
     """
+    plus, minus = _last_turning_points(levels)
+    return twist[:, plus * n] - twist[:, minus * n]
+
+
+def _last_turning_points(levels) -> tuple[int, int]:
+    """The indices of the cycle's last +A and last −A turning points in ``levels``."""
     amplitude = np.max(levels)
     plus = [k for k, level in enumerate(levels) if np.isclose(level, amplitude)]
     minus = [k for k, level in enumerate(levels) if np.isclose(level, -amplitude)]
-    return twist[:, plus[-1] * n] - twist[:, minus[-1] * n]
+    return plus[-1], minus[-1]
 
 
 def _branches(torque, twist, levels, n):
@@ -137,6 +143,11 @@ def lost_motion_centre_line(torque, twist, levels, n, level_torque):
     return 2.0 * (mid0 - mid_minus)
 
 
+def reaches_rated(levels) -> bool:
+    """Whether the cycle of ``levels`` (fractions of T_N) loads the drive to ±T_N."""
+    return bool(np.max(levels) >= 1.0 - 1e-9)
+
+
 def torsion_at_rated_tips(torque, twist, levels, n, rated_torque):
     """Half the span between the twists measured at +T_N and at −T_N, each on the last ramp
     loading towards that side's turning point.
@@ -163,16 +174,14 @@ def torsion_at_rated_tips(torque, twist, levels, n, rated_torque):
     numpy.ndarray, shape (M,)
         Torsion [rad]; NaN when the cycle's amplitude is below T_N.
     """
-    amplitude = np.max(levels)
     M = torque.shape[0]
-    if amplitude < 1.0 - 1e-9:
+    if not reaches_rated(levels):
         return np.full(M, np.nan)
     TN = np.broadcast_to(np.asarray(rated_torque, dtype=float), (M,))
     # the ramp that ends on the last +A (−A) turning point: a cycle of 1 reaches +A only
     # from zero, on the virgin loading, as the catalog's test does
-    plus = [k for k, level in enumerate(levels) if np.isclose(level, amplitude)][-1] - 1
-    minus = [k for k, level in enumerate(levels) if np.isclose(level, -amplitude)][-1] - 1
-    sp, sm = _segment_slice(plus, n), _segment_slice(minus, n)
+    plus, minus = _last_turning_points(levels)
+    sp, sm = _segment_slice(plus - 1, n), _segment_slice(minus - 1, n)
     # np.interp holds the end value beyond the ramp: at an amplitude of exactly T_N the
     # tip's torque may round a hair below T_N, and the tip is then what is read
     at_plus = _interp_rows(torque[:, sp], twist[:, sp], TN, clamp=True)
@@ -285,7 +294,7 @@ def locked_metrics(names, torque, twist, levels, n, T1, T2, rated_torque) -> dic
                        "K3_Nm_per_rad": K3 if np.any(np.asarray(T2) < peak) else None,
                        "torsion_at_rated_arcmin": rad_to_arcmin(phi_rated)}
             out.update({name: value for name, value in figures.items() if value is not None})
-            if amplitude >= 1.0:  # a cycle short of T_N has no twist at T_N to report: the figure is absent
+            if reaches_rated(levels):  # a cycle short of T_N has no twist at T_N to report: the figure is absent
                 out["torsion_at_rated_tip_arcmin"] = rad_to_arcmin(
                     torsion_at_rated_tips(torque, twist, levels, n, rated_torque))
         else:

@@ -37,7 +37,7 @@ from hdsim.model.drive import HarmonicDrive
 from hdsim.model.input_friction import NO_INPUT_FRICTION
 from hdsim.simulation.driven import Bench, sample_model, scalar_ratio
 from hdsim.simulation.loads import per_sample
-from hdsim.simulation.quasistatic import first_mode_period, locked_twist
+from hdsim.simulation.quasistatic import first_mode_period, locked_twist, sticking_tangent
 
 #: the metric groups read in constant-speed windows, which this evaluator reproduces
 #: (docs/sensitivity.md, "Which evaluator": transmission accuracy within 0.01 arcsec and lost motion on reversal
@@ -261,9 +261,8 @@ def criterion(model: HarmonicDrive, bench: Bench):
 
 def _sticking_ratio(model: HarmonicDrive) -> float:
     """The friction's path tangent at rest over the spring's base stiffness (largest of a batch)."""
-    K = np.atleast_1d(np.asarray(model.base_stiffness, dtype=float))
-    rest = np.zeros((len(model.friction.state_names), K.size))
-    return float(np.max(np.asarray(model.friction.path_tangent(rest, 1.0, 0.0 * K, K), dtype=float) / K))
+    K, tangent = sticking_tangent(model)
+    return float(np.max(tangent / K))
 
 
 def _brake_relaxation(bench: Bench, t: np.ndarray, stiffness: float) -> tuple[float, float]:

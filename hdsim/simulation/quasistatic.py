@@ -521,6 +521,16 @@ def sample_grid(time, torque, max_steps: int = 4000, zero_band: float = 0.04):
     return chosen
 
 
+def sticking_tangent(model: HarmonicDrive) -> tuple[np.ndarray, np.ndarray]:
+    """(the spring's base stiffness, the friction's path tangent at rest) [N·m/rad], one per
+    sample of a batch (which may vary the geometry or the friction): their ratio is how much
+    stiffer than the spring the friction holds the output while it sticks."""
+    K = np.broadcast_to(np.asarray(model.base_stiffness, dtype=float), (model.batch_size,))
+    rest = np.zeros((len(model.friction.state_names), K.size))
+    tangent = np.broadcast_to(np.asarray(model.friction.path_tangent(rest, 1.0, 0.0 * K, K), dtype=float), K.shape)
+    return K, tangent
+
+
 def first_mode_period(model: HarmonicDrive, torque, inertia) -> float:
     """Period [s] of the output's torsional mode at its stiffest up to a torque: the time scale
     the quasi-static evaluator may drop.
