@@ -120,8 +120,7 @@ def _dispatch(args, debug: bool) -> int:
         if debug:
             raise
         # the library names its keyword (evaluator='dynamic'); the command line says its option
-        message = _one_line(exc).replace(*_OPTION_WORDS[0])
-        print(f"hdsim {args.verb}: error: {message}", file=sys.stderr)
+        print(f"hdsim {args.verb}: error: {_command_words(_one_line(exc))}", file=sys.stderr)
         return 2
     except BrokenPipeError:
         # the reader stopped reading (`hdsim units | head -1`): neither the input's fault nor the
@@ -156,7 +155,16 @@ _LIBRARIES = frozenset({"numpy", "scipy", "SALib", "h5py", "matplotlib", "numba"
 
 #: a library warning's advice in the Python API's words, and the same in the command's
 _OPTION_WORDS = (("evaluator='dynamic' or 'auto'", "--evaluator dynamic or auto"),
-                 ("evaluator='quasistatic'", "--evaluator quasistatic"), ("'auto'", "--evaluator auto"))
+                 ("evaluator='quasistatic'", "--evaluator quasistatic"),
+                 ("and 'auto' takes it", "and --evaluator auto takes it"))
+
+
+def _command_words(text: str) -> str:
+    """A library message that names the evaluator keyword (evaluator='dynamic') in the
+    command's words (--evaluator dynamic)."""
+    for python, option in _OPTION_WORDS:
+        text = text.replace(python, option)
+    return text
 
 
 def hide_library_warnings(verb: str | None = None) -> None:
@@ -179,10 +187,7 @@ def hide_library_warnings(verb: str | None = None) -> None:
         if _issued_by_library():
             return
         if verb and issubclass(category, SlowRunWarning):  # hdsim's own advice: a line of the command's
-            text = str(message)
-            for python, option in _OPTION_WORDS:
-                text = text.replace(python, option)
-            print(f"hdsim {verb}: warn: {text}", file=sys.stderr)
+            print(f"hdsim {verb}: warn: {_command_words(str(message))}", file=sys.stderr)
             return
         shown(message, category, filename, lineno, file, line)
 

@@ -31,17 +31,10 @@ def add_set_argument(parser, help: str | None = None) -> None:
 
 def parse_sets(items) -> dict[str, str]:
     """``["NAME=VALUE", ...]`` as ``{NAME: VALUE}`` (strings); InputError on a malformed item
-    or a name given twice (the last value had won without a word)."""
-    out = {}
-    for item in items:
-        name, sep, value = item.partition("=")
-        if not sep or not name.strip() or not value.strip():
-            raise InputError(f"--set expects NAME=VALUE, got '{item}'")
-        name = name.strip()
-        if name in out:
-            raise InputError(f"--set {name} is given twice ({out[name]} and {value.strip()}); give it once")
-        out[name] = value.strip()
-    return out
+    or a name given twice (`hdsim.sensitivity.problem.parse_assignments`)."""
+    from hdsim.sensitivity.problem import parse_assignments
+
+    return parse_assignments(items, "--set")
 
 
 def _number(name, text) -> float:

@@ -80,7 +80,7 @@ def run(args) -> int:
     reps, workers = _int(args.replicates, "--replicates"), _int(args.workers, "--workers")
     chunksize = _int(args.chunksize, "--chunksize", minimum=1) if args.chunksize else None
     target = _float(args.target_width, "--target-width") if args.target_width else None
-    if args.resume and not args.out:  # before the study is built; `open_store` says it in Python's words
+    if args.resume and not args.out:  # before the study is built (`open_store` says it too, later)
         raise InputError("--resume needs --out STUDY.h5")
     # where the results go is checked before the study, not after its first chunk
     if args.out:
@@ -91,8 +91,14 @@ def run(args) -> int:
                             names=(*_summary_files(where[1]), _manifests(args, where[1])[0]))
     # a broken model is ModelError (bad input, exit 2); anything else that fails here, a
     # broken process pool included, is the program's failure and reaches main (exit 1)
+    # a drive study's options are judged before its model is built (a named scenario runs the
+    # nominal drive once); an analytic or imported model's names come with it
+    options = (args.second_order, chunksize, args.resume, args.retry_failed, CLI_WORDING)
+    if args.unit:
+        check_options(_names(args), *options)
     func, problem, output, model, analytic = _resolve(args, models)
-    check_options(problem.names, args.second_order, chunksize, args.resume, args.retry_failed, CLI_WORDING)
+    if not args.unit:
+        check_options(problem.names, *options)
     try:
         with open_executor(args.executor, workers, CLI_WORDING) as executor:
             result = run_study(func, problem, n, seed=seed, second_order=args.second_order,
@@ -133,7 +139,7 @@ def _resolve(args, models):
     """
     from hdsim.sensitivity.problem import parse_assignments, parse_bounds_options, parse_range
 
-    names = [s.strip() for s in args.params.split(",") if s.strip()]
+    names = _names(args)
     frac = parse_range(args.range_) if args.range_ else None
     bounds = parse_bounds_options(args.bounds)
     dists = parse_assignments(args.dist, "--dist")
@@ -150,6 +156,11 @@ def _resolve(args, models):
         return models.from_unit(_drive(args.unit), names, args.output, args.scenario, frac,
                                 bounds, dists, evaluator=args.evaluator)
     raise InputError("say what to study: --unit U, --function NAME or --model MODULE:CALLABLE")
+
+
+def _names(args) -> list[str]:
+    """The parameters of ``--params``, in order."""
+    return [s.strip() for s in args.params.split(",") if s.strip()]
 
 
 def _drive(text: str):
