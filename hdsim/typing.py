@@ -15,7 +15,7 @@ from typing import TypeAlias, Union
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["FloatOrArray", "ArrayLike", "ParameterValues", "PathLike", "Bounds"]
+__all__ = ["FloatOrArray", "ArrayLike", "ParameterValues", "PathLike", "Bounds", "is_number"]
 
 FloatOrArray: TypeAlias = Union[float, np.ndarray]
 """One value [SI unit of the quantity], or a 1-D array of values (a batch, one per sample)."""
@@ -31,3 +31,8 @@ PathLike: TypeAlias = Union[str, os.PathLike]
 
 Bounds: TypeAlias = Mapping[str, Union[tuple[float, float], str]]
 """Per-parameter interval of a study: ``(low, high)`` [SI unit of the parameter] or ``"LOW:HIGH"``."""
+
+
+def is_number(value) -> bool:
+    """Whether ``value`` is one real number (Python's or numpy's); a bool is not one."""
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))

@@ -15,9 +15,7 @@ from pathlib import Path
 
 from hdsim.atomic import check_writable_folder, is_special_file
 from hdsim.errors import InputError, SolverError
-
-#: the pages a report folder holds (`hdsim.identification.report_page.Page.write`)
-REPORT_PAGES = ("index.html", "index.md")
+from hdsim.io.report_files import REPORT_PAGES
 
 
 def same_file(a, b) -> bool:

@@ -216,7 +216,7 @@ def fit_breakaway(record, families=(), rows=None, unit=None) -> BreakawayFit:
     families = list(families)
     for f in families:
         if f not in FAMILIES:
-            raise InputError(f"a breakaway test cannot show the {f} family; it shows {', '.join(FAMILIES)}")
+            raise BreakawayTest().cannot_show(f)
     use = rec.moving if rows is None else rec.moving & np.asarray(rows, dtype=bool)
     n = int(np.count_nonzero(use))
     if not rec.starts:

@@ -347,7 +347,10 @@ def covariance(prob: FitProblem, r: np.ndarray) -> np.ndarray | None:
 
 def widened_inverse(A: np.ndarray, r: np.ndarray, extra_dof: int = 0) -> np.ndarray:
     """``s² (AᵀA)⁻¹`` (`inverse_gram`) widened by ``n / n_eff`` for a correlated residual
-    ``r``, with ``s² = rᵀr / (n − columns − extra_dof)``: the covariance of every fit here."""
+    ``r``, with ``s² = rᵀr / (n − columns − extra_dof)``: the covariance of the twist fits,
+    their linear coefficients and the sweep. (A breakaway fit's is ``s² (AᵀA)⁻¹`` unwidened:
+    its rows are a few short starts, whose residual is not the long correlated record the
+    widening is for; left as the battery measured it.)"""
     n = r.size
     s2 = float(r @ r) / max(n - A.shape[1] - extra_dof, 1)
     return inverse_gram(A) * s2 * (n / effective_n(r))

@@ -214,14 +214,13 @@ def _metrics(model, coordinates, rows, scenario, metrics):
         # drive: run_scenario refuses the whole batch for it, so it is left out (NaN) instead;
         # the draws are judged one by one only when the batch holds such a draw
         kept = np.array([_consistent(model.with_updates(coordinates.updates(rows[i:i + 1]))) for i in range(size)])
-        if not kept.all():
-            values = _metrics(model, coordinates, rows[kept], scenario, metrics) if kept.any() else None
-            if values is None:
-                return None
-            out = [np.full(size, np.nan) for _ in metrics]
-            for full, part in zip(out, values):
-                full[kept] = part
-            return out
+        values = _metrics(model, coordinates, rows[kept], scenario, metrics) if 0 < kept.sum() < size else None
+        if values is None:
+            return None
+        out = [np.full(size, np.nan) for _ in metrics]
+        for full, part in zip(out, values):
+            full[kept] = part
+        return out
     try:
         run = run_scenario(batch, scenario, evaluator="quasistatic")
     except (InputError, SolverError):

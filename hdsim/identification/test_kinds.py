@@ -35,14 +35,13 @@ from hdsim.errors import InputError, unknown_name
 from hdsim.identification.engine import run_diagnosis
 from hdsim.identification.policy import Thresholds
 from hdsim.io.measurement_checks import register_test_columns, unregister_test_columns
+from hdsim.io.report_files import REPORT_PAGES
 from hdsim.model.family import FamilyKnowledge
 
 __all__ = ["TestKind", "FamilyKnowledge", "register_test_kind", "unregister_test_kind", "test_kind", "test_kinds"]
 
 #: test name -> registered kind
 _KINDS: dict[str, "TestKind"] = {}
-#: the pages a report writes into its folder
-REPORT_PAGES = ("index.html", "index.md")
 
 
 class TestKind:

@@ -189,23 +189,9 @@ def run_checks(meas, drive: DriveScale) -> tuple[list[Check], dict]:
     constant = not ke and np.ptp(T) == 0.0  # a driven test may hold one load; a locked test must vary it
     if constant:
         checks.append(constant_torque(T[0]))
-    elif ke:
-        checks += _kinematic_error_identity(meas, drive)
     else:
-        checks += _locked_identity(meas, T, drive)
-    if constant:
-        pass  # said above
-    elif swing <= 0 or torque_noise > NOISE_FAIL * swing:
-        checks.append(Check("torque_noise", "fail", f"the torque noise ({torque_noise:.3g} N·m rms) is "
-                            f"{torque_noise / max(swing, 1e-300):.2g} of its swing ({swing:.3g} N·m): the "
-                            "record cannot show how the drive answers the torque"))
-    elif torque_noise > NOISE_WARN * swing:
-        checks.append(Check("torque_noise", "warn", f"the torque is noisy ({torque_noise:.3g} N·m rms, "
-                            f"{100 * torque_noise / swing:.0f} % of its swing; torque from motor current?): "
-                            "loading and unloading are told apart on the smoothed torque"))
-    else:
-        checks.append(Check("torque_noise", "ok", f"torque noise {torque_noise:.3g} N·m rms, "
-                            f"{100 * torque_noise / swing:.2g} % of its swing"))
+        checks += _kinematic_error_identity(meas, drive) if ke else _locked_identity(meas, T, drive)
+        checks.append(_torque_noise_check(torque_noise, swing))
     if not ke:
         cycles = reversals / 2.0
         status = "ok" if reversals >= 2 else "warn"
@@ -345,6 +331,20 @@ def twist_slope(meas) -> tuple[float, float]:
     cov = float(r @ r) / dof * np.linalg.pinv(X.T @ X) * (1.0 + rho) / (1.0 - rho)
     se = math.sqrt(max(cov[0, 0], 0.0))
     return float(coef[0]), float(coef[0] / se) if se > 0 else 0.0
+
+
+def _torque_noise_check(torque_noise: float, swing: float) -> Check:
+    """The torque noise [N·m rms] against the torque's swing [N·m]."""
+    if swing <= 0 or torque_noise > NOISE_FAIL * swing:
+        return Check("torque_noise", "fail", f"the torque noise ({torque_noise:.3g} N·m rms) is "
+                     f"{torque_noise / max(swing, 1e-300):.2g} of its swing ({swing:.3g} N·m): the "
+                     "record cannot show how the drive answers the torque")
+    if torque_noise > NOISE_WARN * swing:
+        return Check("torque_noise", "warn", f"the torque is noisy ({torque_noise:.3g} N·m rms, "
+                     f"{100 * torque_noise / swing:.0f} % of its swing; torque from motor current?): "
+                     "loading and unloading are told apart on the smoothed torque")
+    return Check("torque_noise", "ok", f"torque noise {torque_noise:.3g} N·m rms, "
+                 f"{100 * torque_noise / swing:.2g} % of its swing")
 
 
 def torque_sign_convention(meas):

@@ -27,8 +27,8 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from hdsim.errors import InputError
-from hdsim.model.parameters import is_number
 from hdsim.signals import glitches
+from hdsim.typing import is_number
 
 __all__ = ["ImportOptions", "checked_options", "RowReport", "parse_window", "parse_meta", "split_factor", "apply_rows", "glitch_rows"]
 
@@ -105,13 +105,12 @@ class ImportOptions:
         return keys
 
 
-def checked_options(given: dict, where: str = "load_measurement") -> ImportOptions:
-    """`ImportOptions` of keyword arguments, an unknown name refused by name (``where`` says
-    whose keywords they are)."""
+def checked_options(given: dict) -> ImportOptions:
+    """`ImportOptions` of `load_measurement`'s keyword arguments, an unknown name refused by name."""
     known = [f.name for f in fields(ImportOptions)]
     unknown = [name for name in given if name not in known]
     if unknown:
-        raise InputError(f"{where}: unknown import option {', '.join(map(repr, unknown))}; known: {', '.join(known)}")
+        raise InputError(f"load_measurement: unknown import option {', '.join(map(repr, unknown))}; known: {', '.join(known)}")
     return ImportOptions(**given)
 
 

@@ -25,6 +25,8 @@ from hdsim.atomic import write_text_atomic
 
 MANIFEST = ".hdsim-report.json"
 FORMAT = "hdsim-report-files-1"
+#: the pages a report writes into its folder (`hdsim.identification.report_page.Page.write`)
+REPORT_PAGES = ("index.html", "index.md")
 
 
 def _stamp(path: Path) -> dict | None:

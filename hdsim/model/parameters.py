@@ -17,6 +17,7 @@ from typing import ClassVar
 import numpy as np
 
 from hdsim.errors import InputError
+from hdsim.typing import is_number
 
 
 def param(doc: str, unit: str, lower: float = 0.0, upper: float = np.inf, positive: bool = False,
@@ -65,11 +66,6 @@ def whole_count_message(name: str, value: float, what: str) -> str:
 def count_fields(cls) -> tuple[tuple[str, str], ...]:
     """(name, what it counts) of the numeric fields of ``cls`` that are counts (``param(..., count=...)``)."""
     return tuple((f.name, f.metadata["count"]) for f in fields(cls) if f.metadata.get("count"))
-
-
-def is_number(value) -> bool:
-    """Whether ``value`` is one real number (Python's or numpy's); a bool is not one."""
-    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
 
 
 def _described(value) -> str:
