@@ -93,9 +93,6 @@ def test_a_console_block_of_the_docs_is_what_the_command_prints(command, shown, 
 CONSOLE = re.compile(r"```console\n(.*?)```", re.DOTALL)
 #: a command typed at the prompt and the lines shown under it, up to the next prompt
 TYPED = re.compile(r"^\$ (hdsim\b[^\n]*)\n((?:(?!\$ )[^\n]*\n)*)", re.MULTILINE)
-#: typed commands whose output another test compares line by line
-CHECKED_ELSEWHERE = {"hdsim fit docs/figures/tutorial_bench.csv --effects friction": "test_docs_console.py",
-                     "hdsim diagnose docs/figures/tutorial_bench.csv --effects friction": "test_docs_console.py"}
 #: a run time, which no two runs share: "(4.9 s)", "(2600 elements, …, 0.11 s)"
 RUN_TIME = re.compile(r"\b\d+(?:\.\d+)? s\)")
 BENCH = "docs/figures/tutorial_bench.csv"
@@ -103,13 +100,12 @@ BENCH = "docs/figures/tutorial_bench.csv"
 
 def _typed_commands():
     """Every ``$ hdsim …`` of a console block that shows what it prints (one shown without
-    output, as before a redirection or a long report, quotes nothing), less those
-    `CHECKED_ELSEWHERE`."""
+    output, as before a redirection or a long report, quotes nothing)."""
     out = []
     for page in PAGES:
         for block in CONSOLE.finditer(page.read_text(encoding="utf-8")):
             for m in TYPED.finditer(block.group(1)):
-                if m.group(2).strip() and m.group(1) not in CHECKED_ELSEWHERE:
+                if m.group(2).strip():
                     out.append(pytest.param(page, m.group(1), m.group(2), id=f"{page.name}: $ {m.group(1)}"))
     return out
 
@@ -207,13 +203,12 @@ def test_a_command_typed_in_a_console_block_prints_what_the_page_shows(page, com
 
 
 def test_the_typed_commands_are_found():
-    import test_docs_console
-
     verbs = {p.values[1].split()[1] for p in _typed_commands()}
     assert {"--help", "units", "compliance", "simulate", "fit", "diagnose", "sobol"} <= verbs, verbs
-    assert "hdsim simulate scenarios/reversal.toml" in {p.values[1] for p in _typed_commands()}
-    # a command left to another test is compared there
-    assert set(CHECKED_ELSEWHERE) <= {p.values[0] for p in test_docs_console._blocks()}
+    typed = {p.values[1] for p in _typed_commands()}
+    assert "hdsim simulate scenarios/reversal.toml" in typed
+    # the fit and the diagnosis of the tutorial's bench file, on docs/cli.md
+    assert {f"hdsim {verb} {BENCH} --effects friction" for verb in ("fit", "diagnose")} <= typed
 
 
 def test_the_python_example_prints_what_its_comment_says():
