@@ -8,40 +8,25 @@ plausibility checks of the same fit used the unit given.
 
 from __future__ import annotations
 
-import math
-
-import numpy as np
 import pytest
 
 import hdsim
 import truth_breakaway as tb
-from hdsim.io.measurement import make_measurement
 from hdsim.model.input_friction import InputFriction
+from test_breakaway import _measurement
+from test_running_torque import law_record
 
 LAW = InputFriction(starting_torque=0.05, coulomb_torque=0.03, viscous=1e-4, stribeck_speed=8.0)
 
 
-def _sweep(law=LAW, inertia=3e-5, speeds=(10.0, 100.0), fs=300.0, turns=1.5, ramp=0.1) -> object:
-    """A friction sweep made with the library's law: each speed forward and back, linear ramps."""
-    knots_t, knots_w = [0.0], [0.0]
-    for w in speeds:
-        for sign in (1.0, -1.0):
-            t, cruise = knots_t[-1], turns * 2 * math.pi / w
-            knots_t += [t + ramp, t + ramp + cruise, t + 2 * ramp + cruise]
-            knots_w += [sign * w, sign * w, 0.0]
-    t = np.arange(0.0, knots_t[-1], 1.0 / fs)
-    w = np.interp(t, knots_t, knots_w)
-    theta = np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * np.diff(t))])
-    torque = law.torque(w, theta) + inertia * np.gradient(w, t) + np.random.default_rng(0).normal(0, 1e-4, t.size)
-    return make_measurement("running_torque", t, torque, None, wg_angle=theta, ratio=100.0)
+def _sweep() -> object:
+    """A friction sweep made with the library's law: 10 and 100 rad/s, each forward and back."""
+    return law_record(LAW, inertia=3e-5, noise=1e-4, speeds=(10.0, 100.0), fs=300.0, dwell_turns=1.5)
 
 
 def _breakaway(hidden=("asymmetry", "friction"), seed=1, **overrides):
     cols, meta, truth = tb.make_breakaway_data(hidden, seed=seed, **overrides)
-    meas = make_measurement("breakaway", cols["time_s"], cols["torque_Nm"], cols.get("output_angle_rad"),
-                            wg_angle=cols.get("wg_angle_rad"), ratio=meta["ratio"],
-                            meta={"torque_side": meta["torque_side"]})
-    return meas, truth
+    return _measurement(cols, meta), truth
 
 
 @pytest.mark.parametrize("record", [_sweep, lambda: _breakaway()[0]], ids=["running_torque", "breakaway"])

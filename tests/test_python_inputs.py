@@ -13,6 +13,8 @@ from hdsim.errors import InputError
 from hdsim.model.catalog import load_unit
 from hdsim.scenarios.run import run_scenario
 
+from drive_file_refusal import HEAD
+
 UNIT = load_unit("CSG-25-100")
 
 
@@ -27,7 +29,7 @@ def test_a_unit_name_runs_as_its_drive(evaluator):
 
 def test_a_drive_file_path_runs_as_its_drive(tmp_path):
     path = tmp_path / "zxf.toml"
-    path.write_text('name = "ZXF17-50"\nratio = 50\nrated_torque_Nm = 16.0\n')
+    path.write_text(HEAD)
     assert run_scenario(path, "lost_motion", evaluator="quasistatic").model.name == "ZXF17-50"
 
 
@@ -96,7 +98,7 @@ def test_a_drive_file_given_as_the_scenario_is_named_as_one(tmp_path):
     from hdsim.model.catalog import load_unit
 
     path = tmp_path / "zxf17-50.toml"
-    path.write_text('name = "ZXF17-50"\nratio = 50\nrated_torque_Nm = 16.0\n')
+    path.write_text(HEAD)
     with pytest.raises(InputError, match="a drive or fit file, not a scenario: give it as the unit"):
         hdsim.run_scenario(load_unit("CSG-25-100"), path)
 

@@ -58,6 +58,9 @@ def law_record(law: InputFriction, inertia=2e-5, noise=0.0, seed=0, side="input"
 FULL = InputFriction(starting_torque=0.09, coulomb_torque=0.05, viscous=2e-4, stribeck_speed=8.0,
                      velocity_scale=0.05, ripple_orders=(1.0, 2.0), ripple_amplitudes=(0.05, 0.12),
                      ripple_phases=(0.3, -1.0), coulomb_asymmetry=0.006)
+#: FULL with its ripple a torque of the position alone (the same both ways), of order 2
+POSITION_ONLY = FULL.with_updates(ripple_orders=(), ripple_amplitudes=(), ripple_phases=(), position_orders=(2.0,),
+                                  position_amplitudes=(0.008,), position_phases=(0.4,))
 
 
 # --------------------------------------------------------------------------- the law
@@ -425,8 +428,7 @@ def test_the_fit_recovers_a_position_torque_in_its_own_form():
 
 
 def test_a_diagnosis_tells_the_ripple_forms_apart_with_both_directions():
-    law = FULL.with_updates(ripple_orders=(), ripple_amplitudes=(), ripple_phases=(), position_orders=(2.0,),
-                            position_amplitudes=(0.008,), position_phases=(0.4,))
+    law = POSITION_ONLY
     result = diagnose_running(law_record(law, noise=5e-4), ["friction", "damping"])
     assert result.added == ["ripple"]
     chosen = next(c for c in result.steps[0].candidates if c.family == "ripple")
@@ -438,8 +440,7 @@ def test_a_diagnosis_tells_the_ripple_forms_apart_with_both_directions():
 
 def test_a_sweep_in_one_direction_says_it_cannot_tell_the_ripple_forms_apart():
     # it had added the modulated form silently: 'ambiguous' empty and no next measurement
-    law = FULL.with_updates(ripple_orders=(), ripple_amplitudes=(), ripple_phases=(), position_orders=(2.0,),
-                            position_amplitudes=(0.008,), position_phases=(0.4,))
+    law = POSITION_ONLY
     result = hdsim.diagnose(law_record(law, noise=5e-4, signs=(1.0,)), effects=["friction", "damping"])
     assert result.added == ["ripple"]
     entry = next(a for a in result.to_json()["ambiguous"] if a["families"] == ["ripple", "ripple"])
@@ -450,8 +451,7 @@ def test_a_sweep_in_one_direction_says_it_cannot_tell_the_ripple_forms_apart():
 
 def test_a_ripple_given_in_the_baseline_of_a_one_way_sweep_is_not_called_added():
     # the entry had said "added" (and the page "ripple was added") of a ripple the user gave
-    law = FULL.with_updates(ripple_orders=(), ripple_amplitudes=(), ripple_phases=(), position_orders=(2.0,),
-                            position_amplitudes=(0.008,), position_phases=(0.4,))
+    law = POSITION_ONLY
     result = hdsim.diagnose(law_record(law, noise=5e-4, signs=(1.0,)), effects=["friction", "damping", "ripple"])
     entry = next(a for a in result.to_json()["ambiguous"] if a["families"] == ["ripple", "ripple"])
     assert entry["added"] is False and entry["scores"] == [None, None]

@@ -61,7 +61,8 @@ def test_a_model_failing_everywhere_is_told_to_resume_only_when_the_study_has_a_
 ])
 def test_python_refuses_an_option_that_cannot_mean_what_it_says(options, message):
     # sobol refuses before it builds the drive; run_study, which any model reaches, the same way
-    _refusal(lambda: hdsim.sobol("CSG-25-100", ["h_pz", "h_c"], "lost_motion_arcmin", n=16, workers=1, **options))
+    with pytest.raises(InputError, match=message):
+        hdsim.sobol("CSG-25-100", ["h_pz", "h_c"], "lost_motion_arcmin", n=16, workers=1, **options)
     with pytest.raises(InputError, match=message):
         run_study(Ishigami(), Ishigami().problem(), 16, workers=1, progress=False, **options)
 

@@ -19,6 +19,7 @@ from hdsim.io.measurement import make_measurement
 from hdsim.io.running_checks import sweep_torque_sign
 from hdsim.identification.breakaway import breakaway_torque_sign
 from hdsim.model.input_friction import InputFriction
+from test_breakaway import _measurement
 from test_running_torque import law_record
 
 LAW = InputFriction(starting_torque=0.07, coulomb_torque=0.05, viscous=2e-4, stribeck_speed=8.0, velocity_scale=0.05)
@@ -51,9 +52,7 @@ def test_a_one_way_one_speed_sweep_against_its_motion_is_refused():
 
 def test_a_breakaway_logged_with_the_other_sign_gives_positive_starting_torques():
     cols, meta, truth = tb.make_breakaway_data(("asymmetry",), seed=3)
-    meas = make_measurement("breakaway", cols["time_s"], -cols["torque_Nm"], cols.get("output_angle_rad"),
-                            wg_angle=cols.get("wg_angle_rad"), ratio=meta["ratio"],
-                            meta={"torque_side": meta["torque_side"]})
+    meas = _measurement({**cols, "torque_Nm": -cols["torque_Nm"]}, meta)
     _, checks = breakaway_torque_sign(meas)
     assert [c.check for c in checks] == ["torque_sign"]
     metrics = fit(meas).metrics()
