@@ -67,12 +67,13 @@ def from_unit(unit, names, output, scenario=None, range_frac=None, bounds=None, 
     bounds, dists = (_keyed_as_names(batch, drive, dict(zip(dotted, names)), given, option)
                      for given, option in ((bounds, wording.bounds), (dists, wording.dists)))
     problem = build_problem(names, nominal, range_frac, bounds, dists, wording)
-    _refuse_unbuildable_ends(drive, problem, dotted)
+    spans, start = _spans_and_start(drive, problem, dotted)
+    _refuse_unbuildable_ends(drive, problem, dotted, spans, start)
     # a built-in name travels as a name; anything else (a drive file too) as the model read
     # here, so the workers neither re-read a file nor depend on the working folder
     by_name = isinstance(unit, str) and "drive_file" not in drive.provenance
     func = batch.model_function(unit if by_name else drive, list(names), output, scenario, evaluator, wording,
-                                range_ends=_range_end_drives(drive, problem, dotted))
+                                range_ends=_range_end_drives(drive, problem, dotted, spans, start))
     model = {"unit": drive.name, "output": output, "scenario": _recorded_scenario(output, scenario, func.scenario),
              "fingerprint": batch.drive_fingerprint(drive, func.scenario, func.evaluator),
              "evaluator": func.evaluator}
@@ -118,7 +119,7 @@ def _is_default_scenario(output: str, given, resolved) -> bool:
     return default is not None and load_scenario(default).data == resolved.data
 
 
-def _refuse_unbuildable_ends(drive, problem, dotted: list) -> None:
+def _refuse_unbuildable_ends(drive, problem, dotted: list, spans: list, start: list) -> None:
     """Refuse a uniform range whose end no row of the study can build: every row with that
     end, the other parameters anywhere in their own ranges (`_trial_rows`), is a drive the
     model refuses. A range reaching a negative wall thickness had left three blocks in four
@@ -126,8 +127,7 @@ def _refuse_unbuildable_ends(drive, problem, dotted: list) -> None:
     asked for. The others are not held at their nominal values: a nominal outside its own
     studied range (an undercut range below the nominal undercut) is no row of the study,
     and had refused a box whose every corner builds. (A combination of ends may still fail;
-    those blocks are counted.)"""
-    spans, start = _spans_and_start(drive, problem, dotted)
+    those blocks are counted.) ``spans`` and ``start``: `_spans_and_start`."""
     for i, (name, (low, high), dist) in enumerate(zip(problem.names, problem.bounds, problem.dists)):
         if dist != "unif":
             continue
@@ -137,14 +137,13 @@ def _refuse_unbuildable_ends(drive, problem, dotted: list) -> None:
                 raise InputError(f"the range of {name} reaches {value:g}, a drive the model refuses: {reason}")
 
 
-def _range_end_drives(drive, problem, dotted: list):
+def _range_end_drives(drive, problem, dotted: list, spans: list, start: list):
     """(name, value, drive) at each end of each input's span, the others at their nominal
-    values brought into their own ranges; an end the model refuses there is passed over
-    (`_refuse_unbuildable_ends` has judged it)."""
-    spans, start = _spans_and_start(drive, problem, dotted)
+    values brought into their own ranges (the first of `_trial_rows`); an end the model
+    refuses there is passed over (`_refuse_unbuildable_ends` has judged it)."""
     for i, name in enumerate(problem.names):
         for value in spans[i]:
-            row = [*start[:i], value, *start[i + 1:]]
+            row = next(_trial_rows(spans, start, i, value))
             try:
                 yield name, value, drive.with_updates(dict(zip(dotted, row))).require_consistent()
             except InputError:
